@@ -1,0 +1,129 @@
+// oitsim info TRACE: what an architect wants to know before replaying a trace.
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <iostream>
+
+#include "apps/Commands.hpp"
+#include "apps/Progress.hpp"
+#include "traces/TraceStats.hpp"
+
+namespace oit::cli {
+namespace {
+
+struct InfoArgs {
+  std::string trace;
+  uint32_t width = 0, height = 0;
+  bool json = false;
+};
+
+nlohmann::json complexityJson(const ComplexityStats& c) {
+  nlohmann::json hist = nlohmann::json::array();
+  for (unsigned b = 0; b < kComplexityBins; ++b) {
+    auto [lo, hi] = complexityBinRange(b);
+    nlohmann::json bin = {{"min", lo}, {"pixels", c.histogram[b]}};
+    if (b + 1 < kComplexityBins) bin["max"] = hi;
+    hist.push_back(bin);
+  }
+  return {{"covered_pixels", c.covered_pixels}, {"fragments", c.fragments},
+          {"mean", c.mean()},                   {"max", c.max},
+          {"max_at", {c.max_x, c.max_y}},       {"histogram", hist}};
+}
+
+void printComplexity(const char* title, const ComplexityStats& c, uint64_t pixels) {
+  fmt::print("{}\n", title);
+  if (c.covered_pixels == 0) {
+    fmt::print("  (no fragments)\n");
+    return;
+  }
+  fmt::print("  covered {} of {} pixels ({:.1f}%), mean {:.2f}, max {} at ({}, {})\n",
+             c.covered_pixels, pixels, 100.0 * double(c.covered_pixels) / double(pixels), c.mean(),
+             c.max, c.max_x, c.max_y);
+  uint64_t peak = 1;
+  unsigned last = 0;
+  for (unsigned b = 0; b < kComplexityBins; ++b) {
+    peak = std::max(peak, c.histogram[b]);
+    if (c.histogram[b]) last = b;
+  }
+  for (unsigned b = 0; b <= last; ++b) {
+    auto [lo, hi] = complexityBinRange(b);
+    std::string range = lo == hi ? fmt::format("{}", lo)
+                        : b + 1 == kComplexityBins ? fmt::format("{}+", lo)
+                                                   : fmt::format("{}-{}", lo, hi);
+    const int bar = static_cast<int>(40.0 * double(c.histogram[b]) / double(peak) + 0.5);
+    fmt::print("  {:>11} |{:<40} {}\n", range, std::string(bar, '#'), c.histogram[b]);
+  }
+}
+
+void runInfo(const InfoArgs& a) {
+  OpenOptions opts;
+  opts.width = a.width;
+  opts.height = a.height;
+  auto src = openTrace(a.trace, opts);
+  Progress progress("info", !a.json);
+  TraceStats st = computeTraceStats(*src, [&](uint64_t done, uint64_t total) {
+    progress.update(total ? double(done) / double(total) : 0.0, humanCount(double(done)) + " fragments");
+  });
+  progress.finish();
+  const TraceHeader& h = st.header;
+  const uint64_t pixels = uint64_t(h.width) * h.height;
+  const bool csv = std::filesystem::path(a.trace).extension() == ".csv";
+
+  if (a.json) {
+    nlohmann::json j;
+    j["trace"] = a.trace;
+    j["format"] = csv ? "csv" : "binary";
+    j["version"] = h.version;
+    j["width"] = h.width;
+    j["height"] = h.height;
+    j["encoding"] = toString(h.encoding);
+    j["fragments"] = st.fragments;
+    if (h.camera) j["camera"] = {{"near", h.camera->near_plane}, {"far", h.camera->far_plane}};
+    j["draws"] = nlohmann::json::array();
+    for (const DrawStats& d : st.draws)
+      j["draws"].push_back({{"id", d.draw.id}, {"name", d.draw.name}, {"class", toString(d.draw.cls)},
+                            {"fragments", d.fragments}});
+    j["depth_complexity"] = {{"all", complexityJson(st.all)},
+                             {"transparent", complexityJson(st.transparent)},
+                             {"opaque", complexityJson(st.opaque)}};
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+
+  fmt::print("trace        {} ({} v{}, {} colour)\n", a.trace, csv ? "CSV" : "binary", h.version,
+             toString(h.encoding));
+  fmt::print("resolution   {} x {} ({} pixels)\n", h.width, h.height, pixels);
+  if (h.camera)
+    fmt::print("camera       near {} far {}\n", h.camera->near_plane, h.camera->far_plane);
+  else
+    fmt::print("camera       none (view-space weights unavailable)\n");
+  fmt::print("fragments    {} ({} transparent, {} opaque)\n", st.fragments, st.transparent.fragments,
+             st.opaque.fragments);
+  fmt::print("draws        {}\n", st.draws.size());
+  fmt::print("  {:>4}  {:<11}  {:<20}  {:>12}  {:>6}  {:>10}\n", "id", "class", "name", "fragments",
+             "share", "prims>=");
+  for (const DrawStats& d : st.draws)
+    fmt::print("  {:>4}  {:<11}  {:<20}  {:>12}  {:>5.1f}%  {:>10}\n", d.draw.id, toString(d.draw.cls),
+               d.draw.name, d.fragments,
+               st.fragments ? 100.0 * double(d.fragments) / double(st.fragments) : 0.0,
+               d.fragments ? d.max_prim + 1ull : 0ull);
+  fmt::print("covered      {} pixels ({:.1f}%) by any fragment\n", st.all.covered_pixels,
+             pixels ? 100.0 * double(st.all.covered_pixels) / double(pixels) : 0.0);
+  printComplexity("depth complexity, transparent fragments per covered pixel:", st.transparent, pixels);
+  printComplexity("depth complexity, all fragments per covered pixel:", st.all, pixels);
+}
+
+}  // namespace
+
+void addInfoCommand(CLI::App& app) {
+  auto args = std::make_shared<InfoArgs>();
+  CLI::App* cmd = app.add_subcommand("info", "Describe a trace: resolution, draws, depth complexity");
+  cmd->add_option("trace", args->trace, "Trace file (.oitt binary or .csv)")->required();
+  cmd->add_option("--width", args->width, "Frame width of a CSV trace without a width comment");
+  cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment");
+  cmd->add_flag("--json", args->json, "Print the statistics as JSON");
+  cmd->callback([args] { runInfo(*args); });
+}
+
+}  // namespace oit::cli

@@ -1,0 +1,31 @@
+// oitsim: command-line entry. SystemC's library owns main() and calls sc_main().
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+
+#include "apps/Commands.hpp"
+
+int sc_main(int argc, char* argv[]) {
+  CLI::App app{"oitsim: cycle-approximate GPU ROP model for order-independent transparency"};
+  app.set_version_flag("--version", std::string("oitsim ") + OITSIM_VERSION);
+  app.require_subcommand(1);
+  oit::cli::addGenCommand(app);
+  oit::cli::addScenesCommand(app);
+  oit::cli::addInfoCommand(app);
+  oit::cli::addConvertCommand(app);
+  oit::cli::addRunCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    // Subcommand callbacks throw on bad input; the message names file, offset or option.
+    std::fflush(stdout);
+    fmt::print(stderr, "oitsim: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}
