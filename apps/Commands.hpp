@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace oit::cli {
 
@@ -11,5 +12,9 @@ void addInfoCommand(CLI::App& app);     // oitsim info TRACE
 void addConvertCommand(CLI::App& app);  // oitsim convert IN OUT
 void addRunCommand(CLI::App& app);      // oitsim run --trace T ...
 void addScenesCommand(CLI::App& app);   // oitsim scenes
+
+// The command line as typed (recorded in reports so a run can be repeated).
+void setCommandLine(int argc, char* argv[]);
+const std::string& commandLine();
 
 }  // namespace oit::cli

@@ -9,6 +9,7 @@
 #include "apps/Commands.hpp"
 
 int sc_main(int argc, char* argv[]) {
+  oit::cli::setCommandLine(argc, argv);
   CLI::App app{"oitsim: cycle-approximate GPU ROP model for order-independent transparency"};
   app.set_version_flag("--version", std::string("oitsim ") + OITSIM_VERSION);
   app.require_subcommand(1);
