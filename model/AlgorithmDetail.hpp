@@ -1,0 +1,121 @@
+// Internal helpers shared by the algorithm implementations (not a public API).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+
+#include "model/OitAlgorithm.hpp"
+
+namespace oit::model::detail {
+
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
+inline constexpr unsigned kMaxLayers = 64;  // bounds the on-stack row arrays
+
+// Row access. fp32 rows are the raw r, g, b, t, z binary32 words (FORMATS.md),
+// i.e. LayerRow's own layout, so the hot path copies instead of calling the
+// codec; test_algorithms checks this equals encodeRow/decodeRow.
+inline LayerRow loadRow(StorageFormat f, const uint32_t* w) {
+  if (f == StorageFormat::Fp32) {
+    LayerRow r;
+    static_assert(sizeof(LayerRow) == 5 * sizeof(uint32_t));
+    std::memcpy(&r, w, sizeof r);
+    return r;
+  }
+  return decodeRow(f, w);
+}
+inline void storeRow(StorageFormat f, const LayerRow& r, uint32_t* w) {
+  if (f == StorageFormat::Fp32) {
+    std::memcpy(w, &r, sizeof r);
+    return;
+  }
+  encodeRow(f, r, w);
+}
+
+inline constexpr LayerRow kEmptyRow{0.0f, 0.0f, 0.0f, 1.0f, kInf};
+
+// The fragment as a blending-array row: premultiplied colour, T = 1 - a.
+inline LayerRow fragmentRow(const Fragment& f) {
+  return {f.a * f.r, f.a * f.g, f.a * f.b, 1.0f - f.a, f.z};
+}
+
+// An RGBA accumulator (render-target-like) in the storage format's precision:
+// fp32 -> 4 words, fp16 -> 4 halves in 2 words, rgba8t8z32 -> 4 unorm8 in 1 word.
+struct Rgba {
+  float r, g, b, a;
+};
+inline unsigned accWords(StorageFormat f) {
+  switch (f) {
+    case StorageFormat::Fp32: return 4;
+    case StorageFormat::Fp16: return 2;
+    case StorageFormat::Rgba8T8Z32: return 1;
+  }
+  return 4;
+}
+inline Rgba loadAcc(StorageFormat f, const uint32_t* w) {
+  switch (f) {
+    case StorageFormat::Fp16:
+      return {decodeHalf(uint16_t(w[0])), decodeHalf(uint16_t(w[0] >> 16)),
+              decodeHalf(uint16_t(w[1])), decodeHalf(uint16_t(w[1] >> 16))};
+    case StorageFormat::Rgba8T8Z32:
+      return {decodeUnorm8(uint8_t(w[0])), decodeUnorm8(uint8_t(w[0] >> 8)),
+              decodeUnorm8(uint8_t(w[0] >> 16)), decodeUnorm8(uint8_t(w[0] >> 24))};
+    case StorageFormat::Fp32: break;
+  }
+  Rgba v;
+  std::memcpy(&v, w, sizeof v);
+  return v;
+}
+inline void storeAcc(StorageFormat f, const Rgba& v, uint32_t* w) {
+  switch (f) {
+    case StorageFormat::Fp16:
+      w[0] = uint32_t(encodeHalf(v.r)) | uint32_t(encodeHalf(v.g)) << 16;
+      w[1] = uint32_t(encodeHalf(v.b)) | uint32_t(encodeHalf(v.a)) << 16;
+      return;
+    case StorageFormat::Rgba8T8Z32:
+      w[0] = uint32_t(encodeUnorm8(v.r)) | uint32_t(encodeUnorm8(v.g)) << 8 |
+             uint32_t(encodeUnorm8(v.b)) << 16 | uint32_t(encodeUnorm8(v.a)) << 24;
+      return;
+    case StorageFormat::Fp32: break;
+  }
+  std::memcpy(w, &v, sizeof v);
+}
+
+inline float asFloat(uint32_t w) {
+  float f;
+  std::memcpy(&f, &w, 4);
+  return f;
+}
+inline uint32_t asWord(float f) {
+  uint32_t w;
+  std::memcpy(&w, &f, 4);
+  return w;
+}
+
+// Last line of defence of every resolve: NaN -> 0, +-Inf -> +-FLT_MAX.
+inline float finiteOr0(float v) {
+  if (std::isnan(v)) return 0.0f;
+  return std::clamp(v, -std::numeric_limits<float>::max(), std::numeric_limits<float>::max());
+}
+inline Rgb finiteRgb(float r, float g, float b) { return {finiteOr0(r), finiteOr0(g), finiteOr0(b)}; }
+
+[[noreturn]] void badParam(std::string_view algo, const std::string& what);
+void requireLayers(std::string_view algo, const AlgorithmParams& p);
+void requireFormat(std::string_view algo, const AlgorithmParams& p,
+                   std::initializer_list<StorageFormat> allowed);
+
+std::unique_ptr<OitAlgorithm> makeABuffer(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeAlpha(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeMlab(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeHybrid(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeAdaptive(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeKBuffer(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeWsum(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeWavg(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeWboit(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeSlab(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeStochastic(const AlgorithmParams&);
+
+}  // namespace oit::model::detail

@@ -1,0 +1,106 @@
+// The functional golden model's frame loop: one rule set for every algorithm.
+//  - API order = record order (the per-pixel order an ordered pixel lock keeps).
+//  - Opaque draws (header draw table) first build a depth buffer (test LESS,
+//    so the first of equal-depth opaque fragments wins) and its colour, in a
+//    pre-pass over the opaque fragments. The depth buffer starts at +inf, so
+//    every opaque fragment with z in [0,1] lands.
+//  - A transparent fragment at or behind the final opaque depth is culled.
+//  - The rest go to the algorithm in submission order, once per pass (the
+//    source is rewound per pass); equal depths: the later one is in front
+//    (each algorithm implements this).
+//  - Resolve composites over the opaque colour, or over the clear colour where
+//    no opaque fragment landed. All compositing is linear.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "model/Image.hpp"
+#include "model/OitAlgorithm.hpp"
+#include "traces/TraceIO.hpp"
+
+namespace oit::model {
+
+// Opaque / transparent lookup of draw ids from the header's draw table.
+class DrawClassifier {
+ public:
+  explicit DrawClassifier(const TraceHeader& header);
+  // Throws std::runtime_error for a draw id missing from the table.
+  bool isOpaque(uint32_t draw) const {
+    if (draw < dense_.size() && dense_[draw] != kUnknown) return dense_[draw] == kOpaque;
+    return lookupSparse(draw);
+  }
+  bool anyOpaque() const { return any_opaque_; }
+
+ private:
+  static constexpr uint8_t kUnknown = 0, kOpaque = 1, kTransparent = 2;
+  bool lookupSparse(uint32_t draw) const;
+  std::vector<uint8_t> dense_;                    // ids below 2^20
+  std::unordered_map<uint32_t, bool> sparse_;     // larger ids
+  bool any_opaque_ = false;
+};
+
+// Result of the opaque pre-pass (also what the timing model needs).
+struct OpaqueLayer {
+  uint32_t width = 0, height = 0;
+  std::vector<float> depth;  // +inf where no opaque fragment landed
+  std::vector<Rgb> colour;   // straight rgb of the winning opaque fragment
+  uint64_t fragments = 0;    // opaque fragments seen
+  bool landed(size_t pixel) const { return depth[pixel] != std::numeric_limits<float>::infinity(); }
+};
+// Rewinds the source and reads it once. Throws std::runtime_error for a
+// fragment outside the frame or of an unknown draw.
+OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes);
+
+struct RenderProgress {
+  unsigned pass;            // 0 = opaque pre-pass, 1.. = algorithm pass + 1
+  unsigned passes;          // total source passes (1 + algorithm passes)
+  std::string_view what;    // "opaque" or the algorithm's pass name
+  uint64_t fragments_done;  // in this pass
+  uint64_t fragments_total; // header fragment count (0 if unknown)
+};
+
+struct RenderOptions {
+  Rgb clear_colour{0.0f, 0.0f, 0.0f};
+  // Called every ~progress_every fragments and at the end of every pass.
+  std::function<void(const RenderProgress&)> progress;
+  uint64_t progress_every = uint64_t(1) << 22;
+};
+
+struct RenderCounts {
+  uint64_t fragments_in = 0;  // records read (one pass)
+  uint64_t opaque = 0;
+  uint64_t culled = 0;        // transparent at or behind the final opaque depth
+  // Outcomes of the algorithm's first pass (where storage is decided).
+  uint64_t stored = 0, merged = 0, discarded = 0;
+  // outcomes[pass][InsertOutcome] for every algorithm pass.
+  std::vector<std::array<uint64_t, kOutcomeCount>> pass_outcomes;
+  uint64_t bytes_read = 0, bytes_written = 0;  // per-pixel state traffic, all passes
+  unsigned source_passes = 0;                  // times the source was read
+
+  bool balanced() const { return opaque + culled + stored + merged + discarded == fragments_in; }
+};
+
+struct RenderResult {
+  Image image;
+  RenderCounts counts;
+  uint64_t state_bytes = 0;  // per-pixel state (W x H x bytesPerPixel) + pool
+};
+
+class FunctionalRenderer {
+ public:
+  explicit FunctionalRenderer(RenderOptions options = {}) : opt_(std::move(options)) {}
+  // Throws std::runtime_error on a bad fragment (outside the frame, unknown
+  // draw) and whatever the algorithm's beginFrame throws.
+  RenderResult render(FragmentSource& src, OitAlgorithm& algo) const;
+
+ private:
+  RenderOptions opt_;
+};
+
+}  // namespace oit::model

@@ -1,0 +1,133 @@
+// One per-pixel interface for every OIT algorithm of the functional model.
+//
+// An algorithm owns no per-pixel state: the caller owns an array of 32-bit
+// words, stateWords() per pixel, and hands the pixel's words to clear /
+// insert / resolve. insert() is exactly the read-modify-write an ordered
+// pixel lock protects in the ROP, so the SystemC timing model can call it per
+// fragment and charge readBytes / writeBytes of memory traffic.
+// Semantics and layouts of each algorithm: model/ALGORITHMS.md.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "model/Image.hpp"
+#include "model/StorageFormat.hpp"
+#include "traces/Fragment.hpp"
+
+namespace oit::model {
+
+// What one insert did to the pixel state (the timing model counts these).
+enum class InsertOutcome : uint8_t {
+  Stored = 0,     // kept without loss (new row/node/sample, or accumulated)
+  Merged = 1,     // kept, but older data was compressed or evicted to make room
+                  // (rows merged, tail update, node removed, furthest layer dropped)
+  Discarded = 2,  // the fragment did not enter the state (a = 0, behind a full
+                  // list, rejected by a random test); the state is unchanged
+                  // except for bookkeeping words (counters, total transmittance)
+};
+inline constexpr unsigned kOutcomeCount = 3;
+const char* toString(InsertOutcome o);
+
+// Layout of the fixed-size per-pixel state: `rows` rows of `format`
+// (rowWords(format) words each, row 0 first) followed by `extra_words` words.
+struct StateLayout {
+  unsigned rows = 0;
+  StorageFormat format = StorageFormat::Fp32;
+  unsigned extra_words = 0;
+  std::string extra;  // what the extra words hold (human-readable)
+
+  unsigned words() const { return rows * rowWords(format) + extra_words; }
+};
+
+// Per-fragment information the ROP has besides the fragment itself.
+struct InsertContext {
+  // Final opaque depth at the pixel, +inf where no opaque fragment landed.
+  // The caller has already culled fragments at or behind it.
+  float opaque_z = std::numeric_limits<float>::infinity();
+};
+
+struct AlgorithmParams {
+  unsigned layers = 4;                       // k: rows / nodes / layers
+  StorageFormat format = StorageFormat::Fp32;
+  unsigned bits = 8;                         // slab: virtual coverage bits b
+  unsigned samples = 8;                      // stochastic: samples S
+  bool coverage_mask = false;                // slab: b-bit coverage masks instead of continuous alpha
+  int weight = 10;                           // wboit: weight equation 7, 8, 9 or 10
+  uint64_t seed = 1;                         // random streams (slab, stochastic)
+  // Overrides the trace header's camera planes (wboit eq. 7-9 need them).
+  std::optional<CameraPlanes> camera;
+};
+
+class OitAlgorithm {
+ public:
+  virtual ~OitAlgorithm() = default;
+
+  virtual std::string_view name() const = 0;
+  const StateLayout& layout() const { return layout_; }
+  // Words of caller-owned state per pixel; bytesPerPixel() = 4 * stateWords().
+  unsigned stateWords() const { return state_words_; }
+  unsigned bytesPerPixel() const { return 4u * state_words_; }
+
+  // Passes over the transparent fragments (1 for single-pass algorithms).
+  virtual unsigned passes() const { return 1; }
+  virtual std::string_view passName(unsigned pass) const;
+
+  // Once per frame before any clear(): checks the trace suits the algorithm
+  // (e.g. wboit eq. 7-9 need camera planes; throws std::invalid_argument) and
+  // resets shared storage (the A-buffer's node pool).
+  virtual void beginFrame(const TraceHeader& header) {}
+
+  virtual void clear(uint32_t* words) = 0;
+  // One fragment (already known transparent and in front of the opaque depth)
+  // in pass `pass` < passes(); the fragments of every pass arrive in
+  // submission order.
+  virtual InsertOutcome insert(uint32_t* words, const Fragment& f, unsigned pass,
+                               const InsertContext& ctx) = 0;
+  // After the last pass. Always finite.
+  virtual Rgb resolve(const uint32_t* words, Rgb background) = 0;
+
+  // Bytes of per-pixel memory one insert reads / writes (the ROP's RMW).
+  virtual unsigned readBytes(unsigned pass, InsertOutcome o) const;
+  virtual unsigned writeBytes(unsigned pass, InsertOutcome o) const;
+
+  // False for the A-buffer (unbounded lists in its own pool).
+  virtual bool bounded() const { return true; }
+  // Bytes held outside the per-pixel words (A-buffer pool), 0 otherwise.
+  virtual uint64_t poolBytes() const { return 0; }
+
+ protected:
+  void setLayout(StateLayout l) {
+    layout_ = std::move(l);
+    state_words_ = layout_.words();
+  }
+
+ private:
+  StateLayout layout_;
+  unsigned state_words_ = 0;
+};
+
+struct AlgorithmInfo {
+  std::string_view name;
+  std::string_view description;  // one line
+};
+
+// In registry order: abuffer, alpha, mlab, hybrid, adaptive, kbuffer, wsum, wavg, wboit,
+// slab, stochastic.
+const std::vector<AlgorithmInfo>& algorithmNames();
+
+// Throws std::invalid_argument naming the valid values on an unknown name or
+// an out-of-range parameter.
+std::unique_ptr<OitAlgorithm> makeAlgorithm(std::string_view name, const AlgorithmParams& params);
+
+// Deterministic random bits of one fragment: a hash of (x, y, draw, prim,
+// seed, stream); no generator state, so any pass or any order gives the same
+// bits (splitmix64 finaliser over the packed key, see ALGORITHMS.md).
+uint64_t fragmentHash(const Fragment& f, uint64_t seed, uint32_t stream);
+
+}  // namespace oit::model

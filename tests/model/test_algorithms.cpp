@@ -1,0 +1,490 @@
+// Per-pixel OIT algorithms against hand-computed values and the A-buffer.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "AlgoTestUtil.hpp"
+#include "model/AlgorithmDetail.hpp"
+
+using namespace oit;
+using namespace oit::model;
+using namespace oit::model::testutil;
+
+namespace {
+
+const std::vector<std::string> kAll = {"abuffer", "alpha", "mlab", "hybrid", "adaptive",
+                                       "kbuffer", "wsum", "wavg", "wboit", "slab", "stochastic"};
+// Algorithms whose pixel depends on fragment order / depth (tie rule matters).
+const std::vector<std::string> kOrdered = {"abuffer", "mlab", "hybrid", "adaptive", "kbuffer"};
+
+}  // namespace
+
+TEST(Registry, ListsEveryAlgorithmWithDescription) {
+  const auto& names = algorithmNames();
+  ASSERT_EQ(names.size(), kAll.size());
+  for (size_t i = 0; i < kAll.size(); ++i) {
+    EXPECT_EQ(names[i].name, kAll[i]);
+    EXPECT_FALSE(names[i].description.empty());
+    EXPECT_EQ(makeAlgorithm(kAll[i], {})->name(), kAll[i]);
+  }
+}
+
+TEST(Registry, RejectsUnknownNamesAndBadParameters) {
+  try {
+    makeAlgorithm("mlba", {});
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mlab"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("wboit"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(makeAlgorithm("mlab", layers(0)), std::invalid_argument);
+  EXPECT_THROW(makeAlgorithm("kbuffer", layers(65)), std::invalid_argument);
+  EXPECT_THROW(makeAlgorithm("adaptive", layers(4, StorageFormat::Fp16)), std::invalid_argument);
+  EXPECT_THROW(makeAlgorithm("wboit", layers(4, StorageFormat::Rgba8T8Z32)), std::invalid_argument);
+  AlgorithmParams p;
+  p.weight = 11;
+  try {
+    makeAlgorithm("wboit", p);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("7, 8, 9 or 10"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Layout, BytesPerPixelFollowTheStorageFormat) {
+  // MLAB paper, Sec. 4.2: 8 B per row in rgba8t8z32; HT iso-memory with MLAB.
+  EXPECT_EQ(makeAlgorithm("mlab", layers(4, StorageFormat::Rgba8T8Z32))->bytesPerPixel(), 32u);
+  EXPECT_EQ(makeAlgorithm("hybrid", layers(4, StorageFormat::Rgba8T8Z32))->bytesPerPixel(), 32u);
+  EXPECT_EQ(makeAlgorithm("mlab", layers(4))->bytesPerPixel(), 80u);
+  EXPECT_EQ(makeAlgorithm("mlab", layers(4, StorageFormat::Fp16))->bytesPerPixel(), 48u);
+  EXPECT_EQ(makeAlgorithm("kbuffer", layers(2))->stateWords(), 10u);
+  EXPECT_EQ(makeAlgorithm("alpha", layers(1, StorageFormat::Rgba8T8Z32))->bytesPerPixel(), 4u);
+  EXPECT_EQ(makeAlgorithm("wboit", layers(1, StorageFormat::Fp16))->bytesPerPixel(), 12u);
+  EXPECT_EQ(makeAlgorithm("adaptive", layers(4))->bytesPerPixel(), 4u * (12 + 5));
+  EXPECT_EQ(makeAlgorithm("abuffer", {})->bytesPerPixel(), 4u);
+  EXPECT_FALSE(makeAlgorithm("abuffer", {})->bounded());
+  EXPECT_EQ(makeAlgorithm("adaptive", {})->passes(), 2u);
+}
+
+TEST(Layout, Fp32FastPathMatchesTheCodec) {
+  const LayerRow row{0.1f, 0.2f, 0.3f, 0.4f, 0.5f};
+  uint32_t a[5], b[5];
+  detail::storeRow(StorageFormat::Fp32, row, a);
+  encodeRow(StorageFormat::Fp32, row, b);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(a[i], b[i]);
+  const LayerRow back = detail::loadRow(StorageFormat::Fp32, b);
+  const LayerRow ref = decodeRow(StorageFormat::Fp32, b);
+  EXPECT_EQ(back.r, ref.r);
+  EXPECT_EQ(back.t, ref.t);
+  EXPECT_EQ(back.z, ref.z);
+}
+
+// One fragment per pixel: every algorithm is exact. Dyadic inputs make every
+// product exact in binary32, so equality is bitwise.
+TEST(Exactness, OneFragmentPerPixelEveryAlgorithmEqualsReference) {
+  std::vector<Fragment> fs = {
+      frag(0, 0, 0.5f, 0.25f, 0.5f, 1.0f, 0.5f),
+      frag(1, 0, 0.25f, 1.0f, 0.75f, 0.0f, 0.25f),
+      frag(2, 0, 0.5f, 0.5f, 0.5f, 0.5f, 1.0f),
+      frag(0, 1, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f, kOpaqueDraw),  // opaque bg (black) behind
+      frag(0, 1, 0.5f, 1.0f, 0.5f, 0.25f, 0.75f),
+      frag(1, 1, 0.75f, 0.5f, 0.25f, 1.0f, 1.0f, kOpaqueDraw),  // opaque bg behind
+      frag(1, 1, 0.5f, 0.25f, 0.25f, 0.25f, 0.5f),
+  };
+  RenderOptions opt;
+  opt.clear_colour = {0.25f, 0.5f, 0.75f};
+  auto expect = [&](uint32_t x, uint32_t y, float a, Rgb c, Rgb bg) {
+    return Rgb{a * c.r + (1 - a) * bg.r, a * c.g + (1 - a) * bg.g, a * c.b + (1 - a) * bg.b};
+  };
+  const Rgb cc = opt.clear_colour;
+  const std::vector<Rgb> want = {
+      expect(0, 0, 0.5f, {0.25f, 0.5f, 1.0f}, cc),   expect(1, 0, 0.25f, {1.0f, 0.75f, 0.0f}, cc),
+      expect(2, 0, 1.0f, {0.5f, 0.5f, 0.5f}, cc),    expect(0, 1, 0.75f, {1.0f, 0.5f, 0.25f}, {0, 0, 0}),
+      expect(1, 1, 0.5f, {0.25f, 0.25f, 0.25f}, {0.5f, 0.25f, 1.0f}), cc,
+  };
+  for (const std::string& name : kAll) {
+    for (unsigned k : {1u, 4u}) {
+      const RenderResult r = render(name, layers(k), fs, 3, 2, opt);
+      const std::vector<size_t> px = {0, 1, 2, 3, 4, 5};
+      for (size_t i : px) {
+        EXPECT_EQ(r.image.pixels[i], want[i]) << name << " k=" << k << " pixel " << i << " got "
+                                              << r.image.pixels[i].r << "," << r.image.pixels[i].g << ","
+                                              << r.image.pixels[i].b;
+      }
+    }
+  }
+}
+
+TEST(Exactness, OneRandomFragmentPerPixelWithin1e6) {
+  const auto fs = randomScene(16, 16, 1, 7);
+  const Image ref = render("abuffer", {}, fs, 16, 16).image;
+  for (const std::string& name : kAll)
+    EXPECT_LT(maxDiff(render(name, layers(1), fs, 16, 16).image, ref), 1e-6) << name;
+}
+
+TEST(Exactness, EnoughLayersEqualReference) {
+  const auto fs = randomScene(12, 12, 6, 11);
+  const Image ref = render("abuffer", {}, fs, 12, 12).image;
+  // hybrid k = 6: 5 core rows and at most one fragment in the tail, which a
+  // one-fragment average represents exactly.
+  for (const std::string name : {"mlab", "hybrid", "adaptive", "kbuffer"})
+    for (unsigned k : {6u, 7u, 16u}) {
+      const RenderResult r = render(name, layers(k), fs, 12, 12);
+      EXPECT_LT(maxDiff(r.image, ref), 1e-6) << name << " k=" << k;
+    }
+  // Too few layers is not exact (the comparison above can fail).
+  for (const std::string name : {"mlab", "hybrid", "adaptive", "kbuffer"})
+    EXPECT_GT(maxDiff(render(name, layers(2), fs, 12, 12).image, ref), 1e-3) << name;
+}
+
+TEST(Mlab, OneLayerExactForSortedInput) {
+  // Pixel (0,0) front to back, (1,0) back to front, 10 fragments each.
+  std::vector<Fragment> fs;
+  for (int i = 0; i < 10; ++i) {
+    const float c = 0.1f * i;
+    fs.push_back(frag(0, 0, 0.05f + 0.09f * i, c, 1 - c, 0.5f, 0.2f + 0.07f * i));
+    fs.push_back(frag(1, 0, 0.95f - 0.09f * i, 1 - c, 0.3f, c, 0.9f - 0.08f * i));
+  }
+  RenderOptions opt;
+  opt.clear_colour = {0.2f, 0.4f, 0.6f};
+  const Image ref = render("abuffer", {}, fs, 2, 1, opt).image;
+  const RenderResult r = render("mlab", layers(1), fs, 2, 1, opt);
+  EXPECT_LT(maxDiff(r.image, ref), 1e-6);
+  EXPECT_EQ(r.counts.merged, 18u);  // every fragment after the first of a pixel
+  EXPECT_EQ(r.counts.stored, 2u);
+  // k-buffer with one layer keeps only the nearest: far from the reference.
+  EXPECT_GT(maxDiff(render("kbuffer", layers(1), fs, 2, 1, opt).image, ref), 0.05);
+}
+
+TEST(Mlab, FragmentBetweenMergedRowsIsCompositedBehind) {
+  // k = 1: z .5 and .9 merge into one row at z .5; then z .7 arrives and lands
+  // behind the merged row (MLAB's approximation), not between.
+  const float a1 = 0.5f, a2 = 0.5f, a3 = 0.5f;
+  std::vector<Fragment> fs = {frag(0, 0, 0.5f, 1, 0, 0, a1), frag(0, 0, 0.9f, 0, 1, 0, a2),
+                              frag(0, 0, 0.7f, 0, 0, 1, a3)};
+  const Rgb got = render("mlab", layers(1), fs, 1, 1).image.pixels[0];
+  EXPECT_EQ(got, (Rgb{0.5f, 0.25f, 0.125f}));  // red, then green, then blue behind
+  const Rgb ref = render("abuffer", {}, fs, 1, 1).image.pixels[0];
+  EXPECT_EQ(ref, (Rgb{0.5f, 0.125f, 0.25f}));  // red, blue, green
+  // k = 2 has room: exact.
+  EXPECT_EQ(render("mlab", layers(2), fs, 1, 1).image.pixels[0], ref);
+}
+
+TEST(Mlab, QuantisedRowsRoundToNearest) {
+  // p = a c = (.125, .25, .5), T = .5 -> unorm8 codes 32, 64, 128 (round to nearest).
+  std::vector<Fragment> fs = {frag(0, 0, 0.5f, 0.25f, 0.5f, 1.0f, 0.5f)};
+  const Rgb got = render("mlab", layers(2, StorageFormat::Rgba8T8Z32), fs, 1, 1).image.pixels[0];
+  EXPECT_EQ(got, (Rgb{32 / 255.0f, 64 / 255.0f, 128 / 255.0f}));
+}
+
+// Equal depths: the later-submitted fragment is in front.
+TEST(TieRule, LaterSubmittedIsInFront) {
+  // red (first) and blue (later) at the same depth, a = .5 each, black bg:
+  // blue in front -> (.25, 0, .5).
+  std::vector<Fragment> fs = {frag(0, 0, 0.5f, 1, 0, 0, 0.5f), frag(0, 0, 0.5f, 0, 0, 1, 0.5f),
+                              // pixel 1: a third, nearer fragment and the tie behind it
+                              frag(1, 0, 0.5f, 1, 0, 0, 0.5f), frag(1, 0, 0.25f, 0, 1, 0, 0.5f),
+                              frag(1, 0, 0.5f, 0, 0, 1, 0.5f)};
+  const Rgb want0{0.25f, 0.0f, 0.5f};
+  const Rgb want1{0.125f, 0.5f, 0.25f};
+  for (const std::string& name : kOrdered) {
+    const unsigned k = name == "hybrid" ? 4 : 3;  // hybrid: 3 core rows
+    const Image img = render(name, layers(k), fs, 2, 1).image;
+    EXPECT_EQ(img.pixels[0], want0) << name;
+    EXPECT_EQ(img.pixels[1], want1) << name;
+  }
+  // One layer: the front (later) fragment of the tie keeps the layer.
+  EXPECT_EQ(render("kbuffer", layers(1), fs, 2, 1).image.pixels[0], (Rgb{0, 0, 0.5f}));
+  EXPECT_EQ(render("mlab", layers(1), fs, 2, 1).image.pixels[0], want0);
+  // hybrid k = 2: the later one in the core, the earlier in the tail.
+  EXPECT_EQ(render("hybrid", layers(2), fs, 2, 1).image.pixels[0], want0);
+}
+
+TEST(TieRule, AlphaBlendingFollowsSubmissionOrder) {
+  std::vector<Fragment> fs = {frag(0, 0, 0.5f, 1, 0, 0, 0.5f), frag(0, 0, 0.5f, 0, 0, 1, 0.5f)};
+  EXPECT_EQ(render("alpha", {}, fs, 1, 1).image.pixels[0], (Rgb{0.25f, 0.0f, 0.5f}));
+}
+
+// Three fragments of mixed depth over a clear colour, hand-computed.
+namespace {
+const Rgb kBg{0.25f, 0.5f, 0.75f};
+std::vector<Fragment> threeFragments() {
+  return {frag(0, 0, 0.2f, 1, 0, 0, 0.5f), frag(0, 0, 0.8f, 0, 1, 0, 0.25f), frag(0, 0, 0.5f, 0, 0, 1, 0.75f)};
+}
+Rgb renderThree(std::string_view name, AlgorithmParams p = {}) {
+  RenderOptions opt;
+  opt.clear_colour = kBg;
+  return render(name, p, threeFragments(), 1, 1, opt).image.pixels[0];
+}
+void expectNear(Rgb got, double r, double g, double b, double tol, const std::string& what) {
+  EXPECT_NEAR(got.r, r, tol) << what;
+  EXPECT_NEAR(got.g, g, tol) << what;
+  EXPECT_NEAR(got.b, b, tol) << what;
+}
+}  // namespace
+
+TEST(Alpha, OverBlendingInSubmissionOrder) {
+  // C1 = .5 red + .5 bg; C2 = .25 green + .75 C1; C3 = .75 blue + .25 C2.
+  EXPECT_EQ(renderThree("alpha"), (Rgb{0.1171875f, 0.109375f, 0.8203125f}));
+  // The reference sorts by depth: red, blue, green.
+  // T = .5 * .75 * .25 = .09375.
+  expectNear(renderThree("abuffer"), 0.5 + 0.25 * 0.09375, 0.5 * 0.25 * 0.25 + 0.5 * 0.09375,
+             0.5 * 0.75 + 0.75 * 0.09375, 1e-7, "abuffer");
+}
+
+TEST(Weighted, WeightedSumByHand) {
+  // S = (.5, .25, .75), sum a = 1.5: C = bg + S - 1.5 bg.
+  EXPECT_EQ(renderThree("wsum"), (Rgb{0.375f, 0.0f, 0.375f}));
+  // Leaves [0,1] below: clamped.
+  RenderOptions opt;
+  opt.clear_colour = {1, 1, 1};
+  std::vector<Fragment> fs = {frag(0, 0, 0.2f, 0, 0, 0, 0.75f), frag(0, 0, 0.3f, 0, 0, 0, 0.75f)};
+  EXPECT_EQ(render("wsum", {}, fs, 1, 1, opt).image.pixels[0], (Rgb{0, 0, 0}));
+}
+
+TEST(Weighted, WeightedAverageByHand) {
+  // avg = S / 1.5 = (1/3, 1/6, 1/2); T = (1 - 1.5/3)^3 = .125.
+  expectNear(renderThree("wavg"), 0.875 / 3 + 0.125 * 0.25, 0.875 / 6 + 0.125 * 0.5, 0.4375 + 0.125 * 0.75,
+             1e-6, "wavg");
+}
+
+TEST(Weighted, WeightedAverageEmptyAndZeroAlphaGiveBackground) {
+  RenderOptions opt;
+  opt.clear_colour = kBg;
+  std::vector<Fragment> fs = {frag(0, 0, 0.2f, 1, 1, 1, 0.0f)};  // pixel 1 gets nothing
+  const Image img = render("wavg", {}, fs, 2, 1, opt).image;
+  EXPECT_EQ(img.pixels[0], kBg);
+  EXPECT_EQ(img.pixels[1], kBg);
+}
+
+TEST(Weighted, WboitEq10ByHand) {
+  // w = a max(.01, 3e3 (1-d)^3): .5*1536 = 768, .25*24 = 6, .75*375 = 281.25.
+  const double A = 768 + 6 + 281.25, R = 0.5 * 0.75 * 0.25;
+  expectNear(renderThree("wboit"), 768 / A * (1 - R) + 0.25 * R, 6 / A * (1 - R) + 0.5 * R,
+             281.25 / A * (1 - R) + 0.75 * R, 1e-6, "wboit eq10");
+}
+
+TEST(Weighted, WboitViewSpaceWeightsNeedCamera) {
+  AlgorithmParams p;
+  p.weight = 7;
+  EXPECT_THROW(renderThree("wboit", p), std::invalid_argument);
+  p.camera = CameraPlanes{1.0f, 101.0f};
+  // z_view = n f / (f - d (f - n)) = 101 / (101 - 100 d).
+  auto zv = [](double d) { return 101.0 / (101.0 - 100.0 * d); };
+  auto w7 = [](double z) {
+    return std::clamp(10.0 / (1e-5 + std::pow(z / 5, 2) + std::pow(z / 200, 6)), 1e-2, 3e3);
+  };
+  auto w9 = [](double z) { return std::clamp(0.03 / (1e-5 + std::pow(z / 200, 4)), 1e-2, 3e3); };
+  const double R = 0.5 * 0.75 * 0.25;
+  for (int eq : {7, 9}) {
+    p.weight = eq;
+    auto w = [&](double d) { return eq == 7 ? w7(zv(d)) : w9(zv(d)); };
+    const double wr = 0.5 * w(0.2), wg = 0.25 * w(0.8), wb = 0.75 * w(0.5), A = wr + wg + wb;
+    expectNear(renderThree("wboit", p), wr / A * (1 - R) + 0.25 * R, wg / A * (1 - R) + 0.5 * R,
+               wb / A * (1 - R) + 0.75 * R, 1e-5, "wboit eq" + std::to_string(eq));
+  }
+  // Camera from the trace header works too.
+  TraceHeader h = header(1, 1);
+  h.camera = CameraPlanes{1.0f, 101.0f};
+  p.camera.reset();
+  p.weight = 8;
+  EXPECT_NO_THROW(render("wboit", p, threeFragments(), 1, 1, {}, h));
+}
+
+TEST(Outcomes, CountsPerAlgorithm) {
+  // Three fragments at one pixel, depth order 1 < 3 < 2 as submitted.
+  const auto fs = threeFragments();
+  auto counts = [&](std::string_view name, unsigned k) { return render(name, layers(k), fs, 1, 1).counts; };
+  RenderCounts c = counts("mlab", 2);
+  EXPECT_EQ(c.stored, 2u);
+  EXPECT_EQ(c.merged, 1u);
+  c = counts("kbuffer", 2);  // the third (z .5) evicts z .8: merged
+  EXPECT_EQ(c.stored, 2u);
+  EXPECT_EQ(c.merged, 1u);
+  c = counts("kbuffer", 1);  // z .8 and .5 arrive behind z .2: dropped, state untouched
+  EXPECT_EQ(c.stored, 1u);
+  EXPECT_EQ(c.discarded, 2u);
+  c = counts("hybrid", 2);  // one core row: every later fragment overflows into the tail
+  EXPECT_EQ(c.stored, 1u);
+  EXPECT_EQ(c.merged, 2u);
+  c = counts("adaptive", 2);
+  EXPECT_EQ(c.stored, 2u);
+  EXPECT_EQ(c.merged, 1u);
+  EXPECT_EQ(c.pass_outcomes.size(), 2u);
+  EXPECT_EQ(c.pass_outcomes[1][0], 3u);  // composite pass: all accumulated
+  for (const std::string& name : kAll) EXPECT_TRUE(counts(name, 2).balanced()) << name;
+}
+
+TEST(Outcomes, ZeroAlphaIsDiscardedWithoutTakingALayer) {
+  std::vector<Fragment> fs = {frag(0, 0, 0.1f, 1, 1, 1, 0.0f), frag(0, 0, 0.5f, 1, 0, 0, 0.5f)};
+  for (const std::string& name : kAll) {
+    if (name == "abuffer") continue;
+    const RenderResult r = render(name, layers(1), fs, 1, 1);
+    EXPECT_EQ(r.counts.discarded, 1u) << name;
+    EXPECT_EQ(r.image.pixels[0], (Rgb{0.5f, 0, 0})) << name;
+  }
+}
+
+TEST(Robustness, NoNanOrInfForAnyFormat) {
+  // 64 fragments per pixel with alphas of exactly 1 and tiny ones.
+  auto fs = randomScene(4, 4, 64, 3, 64);
+  for (size_t i = 0; i < fs.size(); i += 3) fs[i].a = (i % 2) ? 1.0f : 1e-7f;
+  for (const std::string& name : kAll)
+    for (StorageFormat f : {StorageFormat::Fp32, StorageFormat::Fp16, StorageFormat::Rgba8T8Z32}) {
+      std::unique_ptr<OitAlgorithm> probe;
+      try {
+        probe = makeAlgorithm(name, layers(4, f));
+      } catch (const std::invalid_argument&) {
+        continue;  // format not offered by this algorithm
+      }
+      const RenderResult r = render(name, layers(4, f), fs, 4, 4);
+      EXPECT_TRUE(allFinite(r.image)) << name << " " << toString(f);
+      EXPECT_TRUE(r.counts.balanced()) << name;
+    }
+}
+
+TEST(Determinism, SameImageEveryRunAndBatchSize) {
+  const auto fs = randomScene(8, 8, 12, 5);
+  for (const std::string& name : kAll) {
+    const Image a = render(name, layers(3), fs, 8, 8).image;
+    MemorySource src(header(8, 8), fs, 1u << 16);
+    auto algo = makeAlgorithm(name, layers(3));
+    const Image b = FunctionalRenderer().render(src, *algo).image;
+    const Image c = FunctionalRenderer().render(src, *algo).image;  // same object reused
+    EXPECT_EQ(a.pixels, b.pixels) << name;
+    EXPECT_EQ(b.pixels, c.pixels) << name;
+  }
+}
+
+TEST(Interface, DirectPerPixelCallsWithoutRenderer) {
+  // The timing model's view: caller-owned words, clear / insert / resolve.
+  auto algo = makeAlgorithm("mlab", layers(2));
+  std::vector<uint32_t> words(algo->stateWords());
+  algo->beginFrame(header(1, 1));
+  algo->clear(words.data());
+  EXPECT_EQ(algo->resolve(words.data(), {0.5f, 0.5f, 0.5f}), (Rgb{0.5f, 0.5f, 0.5f}));
+  InsertContext ctx;
+  EXPECT_EQ(algo->insert(words.data(), frag(0, 0, 0.5f, 1, 0, 0, 0.5f), 0, ctx), InsertOutcome::Stored);
+  EXPECT_EQ(algo->insert(words.data(), frag(0, 0, 0.25f, 0, 1, 0, 0.5f), 0, ctx), InsertOutcome::Stored);
+  EXPECT_EQ(algo->insert(words.data(), frag(0, 0, 0.75f, 0, 0, 1, 0.5f), 0, ctx), InsertOutcome::Merged);
+  EXPECT_EQ(algo->resolve(words.data(), {0, 0, 0}), (Rgb{0.25f, 0.5f, 0.125f}));
+  EXPECT_EQ(algo->readBytes(0, InsertOutcome::Merged), 40u);
+  EXPECT_EQ(algo->writeBytes(0, InsertOutcome::Discarded), 0u);
+}
+
+TEST(Hash, DeterministicAndSensitiveToEveryKeyField) {
+  const Fragment f = frag(3, 4, 0.5f, 1, 1, 1, 1, 2, 9);
+  const uint64_t h = fragmentHash(f, 1, 0);
+  EXPECT_EQ(h, fragmentHash(f, 1, 0));
+  Fragment g = f;
+  g.x = 4;
+  EXPECT_NE(fragmentHash(g, 1, 0), h);
+  g = f;
+  g.prim = 10;
+  EXPECT_NE(fragmentHash(g, 1, 0), h);
+  g = f;
+  g.draw = 1;
+  EXPECT_NE(fragmentHash(g, 1, 0), h);
+  EXPECT_NE(fragmentHash(f, 2, 0), h);
+  EXPECT_NE(fragmentHash(f, 1, 1), h);
+}
+
+// ---------------------------------------------------------------- slab
+TEST(Slab, BackToFrontWithEnoughLayersIsExact) {
+  // Every new fragment is in front of all layers: nothing occludes it, P = 1
+  // (a b >= 1), so all are kept and the colour pass is exact.
+  std::vector<Fragment> fs;
+  for (uint16_t x = 0; x < 8; ++x)
+    for (int i = 0; i < 6; ++i)
+      fs.push_back(frag(x, 0, 0.9f - 0.1f * i, 0.1f * i, 0.5f, 1.0f - 0.1f * x, 0.2f + 0.1f * i));
+  const Image ref = render("abuffer", {}, fs, 8, 1).image;
+  AlgorithmParams p = layers(6);
+  const RenderResult r = render("slab", p, fs, 8, 1);
+  EXPECT_LT(maxDiff(r.image, ref), 1e-6);
+  EXPECT_EQ(r.counts.stored, fs.size());
+  // Three layers: the furthest are evicted and the result is biased.
+  p.layers = 3;
+  EXPECT_GT(maxDiff(render("slab", p, fs, 8, 1).image, ref), 1e-3);
+}
+
+TEST(Slab, InsertionProbabilityFollowsTheStratifiedTable) {
+  // Per pixel: F1 (front, a .5) then F2 (behind, a .5). With b = 8: s = 4
+  // occluded bits, t = 4 -> P_8(4, 4) = 1 - (4)_4 / (8)_4 = 1 - 24/1680.
+  const uint32_t w = 100, h = 100;
+  std::vector<Fragment> fs;
+  for (uint16_t y = 0; y < h; ++y)
+    for (uint16_t x = 0; x < w; ++x) {
+      fs.push_back(frag(x, y, 0.2f, 1, 0, 0, 0.5f, kTranspDraw, 2 * (y * w + x)));
+      fs.push_back(frag(x, y, 0.8f, 0, 1, 0, 0.5f, kTranspDraw, 2 * (y * w + x) + 1));
+    }
+  const double pDiscard = 24.0 / 1680.0;  // 0.0143
+  for (bool mask : {false, true}) {
+    AlgorithmParams p = layers(4);
+    p.bits = 8;
+    p.coverage_mask = mask;
+    const RenderResult r = render("slab", p, fs, w, h);
+    const double frac = double(r.counts.discarded) / (w * h);
+    EXPECT_NEAR(frac, pDiscard, 0.006) << "mask " << mask;  // ~5 sigma
+    EXPECT_GT(r.counts.discarded, 0u);
+    EXPECT_TRUE(allFinite(r.image));
+  }
+}
+
+TEST(Slab, ManyBitsTieRuleLaterInFront) {
+  std::vector<Fragment> fs = {frag(0, 0, 0.5f, 1, 0, 0, 0.5f), frag(0, 0, 0.5f, 0, 0, 1, 0.5f),
+                              frag(1, 0, 0.5f, 1, 0, 0, 0.5f), frag(1, 0, 0.25f, 0, 1, 0, 0.5f),
+                              frag(1, 0, 0.5f, 0, 0, 1, 0.5f)};
+  AlgorithmParams p = layers(3);
+  p.bits = 1024;  // P_b -> 1: a k-buffer with Enderton's normalisation
+  const Image img = render("slab", p, fs, 2, 1).image;
+  expectNear(img.pixels[0], 0.25, 0.0, 0.5, 1e-6, "pixel 0");
+  expectNear(img.pixels[1], 0.125, 0.5, 0.25, 1e-6, "pixel 1");
+}
+
+TEST(Slab, RejectsBadBits) {
+  AlgorithmParams p;
+  p.bits = 0;
+  EXPECT_THROW(makeAlgorithm("slab", p), std::invalid_argument);
+  p.bits = 33;
+  p.coverage_mask = true;
+  EXPECT_THROW(makeAlgorithm("slab", p), std::invalid_argument);
+  p.samples = 65;
+  EXPECT_THROW(makeAlgorithm("stochastic", p), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------- stochastic
+TEST(Stochastic, TwoLayersAreExactWithStratifiedCoverage) {
+  // With exactly round(a S) = 4 of 8 samples per fragment, the back fragment
+  // of two always sees exactly half the samples: vis = .5 in either order.
+  std::vector<Fragment> fs;
+  for (uint16_t x = 0; x < 64; ++x) {
+    const bool frontFirst = x % 2;
+    Fragment f1 = frag(x, 0, 0.3f, 1, 0.5f, 0, 0.5f, kTranspDraw, 2 * x);
+    Fragment f2 = frag(x, 0, 0.6f, 0, 0.25f, 1, 0.5f, kTranspDraw, 2 * x + 1);
+    if (frontFirst) {
+      fs.push_back(f1);
+      fs.push_back(f2);
+    } else {
+      fs.push_back(f2);
+      fs.push_back(f1);
+    }
+  }
+  const Image ref = render("abuffer", {}, fs, 64, 1).image;
+  AlgorithmParams p;
+  p.samples = 8;
+  EXPECT_LT(maxDiff(render("stochastic", p, fs, 64, 1).image, ref), 1e-6);
+}
+
+TEST(Stochastic, SeedChangesNoiseNotDeterminism) {
+  const auto fs = randomScene(16, 16, 10, 9, 6);
+  AlgorithmParams a;
+  a.samples = 8;
+  AlgorithmParams b = a;
+  b.seed = 2;
+  for (const std::string name : {"stochastic", "slab"}) {
+    const Image i1 = render(name, a, fs, 16, 16).image;
+    EXPECT_EQ(i1.pixels, render(name, a, fs, 16, 16).image.pixels) << name;
+    EXPECT_NE(i1.pixels, render(name, b, fs, 16, 16).image.pixels) << name;
+  }
+}
