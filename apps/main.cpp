@@ -8,7 +8,7 @@
 
 #include "apps/Commands.hpp"
 
-int sc_main(int argc, char* argv[]) {
+extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::setCommandLine(argc, argv);
   CLI::App app{"oitsim: cycle-approximate GPU ROP model for order-independent transparency"};
   app.set_version_flag("--version", std::string("oitsim ") + OITSIM_VERSION);
@@ -18,6 +18,7 @@ int sc_main(int argc, char* argv[]) {
   oit::cli::addInfoCommand(app);
   oit::cli::addConvertCommand(app);
   oit::cli::addRunCommand(app);
+  oit::cli::addStressCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
