@@ -12,6 +12,7 @@ void addInfoCommand(CLI::App& app);     // oitsim info TRACE
 void addConvertCommand(CLI::App& app);  // oitsim convert IN OUT
 void addRunCommand(CLI::App& app);      // oitsim run --trace T ...
 void addScenesCommand(CLI::App& app);   // oitsim scenes
+void addStressCommand(CLI::App& app);   // oitsim stress [--out DIR]
 
 // The command line as typed (recorded in reports so a run can be repeated).
 void setCommandLine(int argc, char* argv[]);
