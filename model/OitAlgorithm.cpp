@@ -52,6 +52,8 @@ const std::vector<Entry>& entries() {
        detail::makeSlab},
       {{"stochastic", "stochastic transparency (Enderton 2010): S depth samples, alpha-corrected colour pass"},
        detail::makeStochastic},
+      {{"mlcb", "multi-layer coverage blending (Wyman 2016): k sorted layers with b-bit pre-occluded masks, merge the last two"},
+       detail::makeMlcb},
   };
   return e;
 }

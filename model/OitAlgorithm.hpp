@@ -55,11 +55,11 @@ struct InsertContext {
 struct AlgorithmParams {
   unsigned layers = 4;                       // k: rows / nodes / layers
   StorageFormat format = StorageFormat::Fp32;
-  unsigned bits = 8;                         // slab: virtual coverage bits b
+  unsigned bits = 8;                         // slab: virtual coverage bits b; mlcb: mask bits b (1..64)
   unsigned samples = 8;                      // stochastic: samples S
   bool coverage_mask = false;                // slab: b-bit coverage masks instead of continuous alpha
   int weight = 10;                           // wboit: weight equation 7, 8, 9 or 10
-  uint64_t seed = 1;                         // random streams (slab, stochastic)
+  uint64_t seed = 1;                         // random streams (slab, stochastic, mlcb)
   // Overrides the trace header's camera planes (wboit eq. 7-9 need them).
   std::optional<CameraPlanes> camera;
 };
@@ -118,7 +118,7 @@ struct AlgorithmInfo {
 };
 
 // In registry order: abuffer, alpha, mlab, hybrid, adaptive, kbuffer, wsum, wavg, wboit,
-// slab, stochastic.
+// slab, stochastic, mlcb.
 const std::vector<AlgorithmInfo>& algorithmNames();
 
 // Throws std::invalid_argument naming the valid values on an unknown name or

@@ -2,8 +2,6 @@
 // counts, passes, progress, errors.
 #include <gtest/gtest.h>
 
-#include <chrono>
-#include <cstdio>
 #include <stdexcept>
 
 #include "AlgoTestUtil.hpp"
@@ -124,32 +122,4 @@ TEST(Renderer, BandwidthCountsFollowOutcomes) {
   EXPECT_EQ(r.counts.bytes_read, 4u * 40);
   EXPECT_EQ(r.counts.bytes_written, 3u * 40);  // the a = 0 insert writes nothing
   EXPECT_EQ(r.state_bytes, 40u);
-}
-
-// Throughput measurement, not a check: run with --gtest_also_run_disabled_tests.
-TEST(RendererSpeed, DISABLED_MlabK4Throughput) {
-  const uint32_t w = 256, h = 256;
-  std::vector<Fragment> fs;
-  uint32_t s = 12345;
-  auto rnd = [&] { return (s = s * 1664525u + 1013904223u) >> 8; };
-  for (int layer = 0; layer < 40; ++layer)
-    for (uint32_t y = 0; y < h; ++y)
-      for (uint32_t x = 0; x < w; ++x)
-        fs.push_back(frag(uint16_t(x), uint16_t(y), (rnd() % 1000000) / 1e6f, 0.5f, 0.25f, 0.75f,
-                          0.1f + (rnd() % 100) / 200.0f));
-  TraceHeader hdr = header(w, h);
-  hdr.draws = {{kTranspDraw, DrawClass::Transparent, "glass"}};
-  for (const std::string name : {"mlab", "alpha", "hybrid", "kbuffer", "adaptive", "wboit", "abuffer"}) {
-    for (StorageFormat f : {StorageFormat::Fp32, StorageFormat::Rgba8T8Z32}) {
-      if ((name == "adaptive" || name == "wboit" || name == "abuffer") && f != StorageFormat::Fp32) continue;
-      MemorySource src(hdr, fs);
-      auto a = makeAlgorithm(name, layers(4, f));
-      const auto t0 = std::chrono::steady_clock::now();
-      const RenderResult r = FunctionalRenderer().render(src, *a);
-      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::printf("%-9s k=4 %-10s %zu fragments x %u passes: %.3f s, %.1f M fragments/s (per pass)\n",
-                  name.c_str(), toString(f), fs.size(), r.counts.source_passes, sec,
-                  fs.size() * r.counts.source_passes / sec / 1e6);
-    }
-  }
 }

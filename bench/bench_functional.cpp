@@ -1,0 +1,160 @@
+// Throughput of the functional golden model (FunctionalRenderer::render) per
+// OIT algorithm on a synthetic in-memory scene: W x H pixels x L full-screen
+// transparent layers with random depth and alpha (no opaque draws).
+// Two submission orders of the same fragments (identical per-pixel order, so
+// identical images):
+//   layered - L full-screen draws one after the other, each in raster order
+//             (what a GPU submits; every pixel's state is revisited L times);
+//   raster  - pixel after pixel, all L fragments of a pixel back to back
+//             (best cache locality for the per-pixel state).
+// Best of N timed renders after nothing else (the scene is generated first).
+//
+//   bench_functional [--algos all|a,b,...] [--k 4] [--format fp32|fp16|rgba8t8z32]
+//                    [--size 256] [--layers 40] [--bits 32] [--order both|layered|raster]
+//                    [--reps 3]
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "model/FunctionalRenderer.hpp"
+#include "model/MemorySource.hpp"
+#include "model/OitAlgorithm.hpp"
+
+using namespace oit;
+using namespace oit::model;
+
+namespace {
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= s.size()) {
+    const size_t comma = s.find(',', start);
+    const size_t end = comma == std::string::npos ? s.size() : comma;
+    if (end > start) out.push_back(s.substr(start, end - start));
+    start = end + 1;
+  }
+  return out;
+}
+
+// Layer-major order; the raster variant is a stable per-pixel regrouping.
+std::vector<Fragment> scene(uint32_t w, uint32_t h, unsigned layers, bool raster) {
+  std::vector<Fragment> fs;
+  fs.reserve(size_t(w) * h * layers);
+  uint32_t s = 12345;
+  auto rnd = [&] { return (s = s * 1664525u + 1013904223u) >> 8; };
+  for (unsigned layer = 0; layer < layers; ++layer)
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x) {
+        const float z = float(rnd() % 1000000) / 1e6f;
+        const float a = 0.1f + float(rnd() % 100) / 200.0f;
+        fs.push_back(Fragment{uint16_t(x), uint16_t(y), z, float(rnd() % 256) / 255.0f,
+                              float(rnd() % 256) / 255.0f, float(rnd() % 256) / 255.0f, a,
+                              uint32_t(y * w + x), 1 + layer});
+      }
+  if (!raster) return fs;
+  std::vector<Fragment> out(fs.size());
+  const size_t px = size_t(w) * h;
+  for (size_t i = 0; i < fs.size(); ++i) out[(i % px) * layers + i / px] = fs[i];
+  return out;
+}
+
+// Order-independent checksum of the image (same scene -> same value in both orders).
+double checksum(const Image& img) {
+  double c = 0;
+  for (const Rgb& p : img.pixels) c += p.r + 2.0 * p.g + 3.0 * p.b;
+  return c;
+}
+
+[[noreturn]] void usage(const char* argv0, const std::string& why) {
+  std::fprintf(stderr,
+               "%s\nusage: %s [--algos all|a,b,...] [--k 4] [--format fp32|fp16|rgba8t8z32] [--size 256]\n"
+               "       [--layers 40] [--bits 32] [--order both|layered|raster] [--reps 3]\n",
+               why.c_str(), argv0);
+  std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string algos = "all", format = "fp32", order = "both";
+  unsigned k = 4, size = 256, layers = 40, bits = 32, reps = 3;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) usage(argv[0], "missing value after " + a);
+    const std::string v = argv[++i];
+    auto num = [&] {
+      char* end = nullptr;
+      const unsigned long n = std::strtoul(v.c_str(), &end, 10);
+      if (v.empty() || *end || n == 0 || n > 1000000) usage(argv[0], "bad number for " + a + ": " + v);
+      return unsigned(n);
+    };
+    if (a == "--algos") algos = v;
+    else if (a == "--k") k = num();
+    else if (a == "--format") format = v;
+    else if (a == "--size") size = num();
+    else if (a == "--layers") layers = num();
+    else if (a == "--bits") bits = num();
+    else if (a == "--order") order = v;
+    else if (a == "--reps") reps = num();
+    else usage(argv[0], "unknown option " + a);
+  }
+  if (size > 4096) usage(argv[0], "--size must be <= 4096");
+  if (order != "both" && order != "layered" && order != "raster") usage(argv[0], "bad --order " + order);
+  std::vector<std::string> names;
+  if (algos == "all")
+    for (const AlgorithmInfo& info : algorithmNames()) names.emplace_back(info.name);
+  else
+    names = split(algos);
+
+  AlgorithmParams params;
+  params.layers = k;
+  params.bits = bits;   // slab (virtual bits) and mlcb (mask bits)
+  params.samples = 8;   // stochastic
+  try {
+    params.format = parseStorageFormat(format);
+  } catch (const std::invalid_argument& e) {
+    usage(argv[0], e.what());
+  }
+
+  TraceHeader hdr;
+  hdr.width = size;
+  hdr.height = size;
+  for (unsigned l = 0; l < layers; ++l) hdr.draws.push_back({1 + l, DrawClass::Transparent, "layer"});
+
+  std::printf("# %ux%u x %u layers = %zu fragments, k=%u, format %s, bits %u, best of %u\n", size, size, layers,
+              size_t(size) * size * layers, k, format.c_str(), bits, reps);
+  std::printf("%-10s %-8s %7s %6s %9s %12s %14s %14s\n", "algorithm", "order", "passes", "B/px", "best s",
+              "Mfrag/s", "Mfrag-pass/s", "checksum");
+  for (const std::string ord : {"layered", "raster"}) {
+    if (order != "both" && order != ord) continue;
+    const std::vector<Fragment> fs = scene(size, size, layers, ord == "raster");
+    for (const std::string& name : names) {
+      std::unique_ptr<OitAlgorithm> algo;
+      try {
+        algo = makeAlgorithm(name, params);
+      } catch (const std::invalid_argument& e) {
+        std::printf("%-10s %-8s n/a (%s)\n", name.c_str(), ord.c_str(), e.what());
+        continue;
+      }
+      double best = 1e300;
+      RenderResult r;
+      for (unsigned rep = 0; rep < reps; ++rep) {
+        MemorySource src(hdr, fs);
+        const auto t0 = std::chrono::steady_clock::now();
+        r = FunctionalRenderer().render(src, *algo);
+        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
+      const double n = double(fs.size());
+      std::printf("%-10s %-8s %7u %6u %9.3f %12.2f %14.2f %14.6f\n", name.c_str(), ord.c_str(),
+                  r.counts.source_passes, algo->bytesPerPixel(), best, n / best / 1e6,
+                  n * r.counts.source_passes / best / 1e6, checksum(r.image));
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
