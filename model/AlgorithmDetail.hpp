@@ -99,7 +99,13 @@ inline float finiteOr0(float v) {
   if (std::isnan(v)) return 0.0f;
   return std::clamp(v, -std::numeric_limits<float>::max(), std::numeric_limits<float>::max());
 }
-inline Rgb finiteRgb(float r, float g, float b) { return {finiteOr0(r), finiteOr0(g), finiteOr0(b)}; }
+// The final colour write saturates to [0,1], as a ROP writing a UNORM target
+// does: quantised rows can round colour + transmittance just above 1 (8-bit:
+// 128/255 + 128/255), and wboit's published clamp(A.a, 1e-4, 5e4) scales
+// colour above 1 once the weight sum passes 5e4. The error stays measured
+// against the reference; only the range is enforced here.
+inline float saturate01(float v) { return std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f); }
+inline Rgb finiteRgb(float r, float g, float b) { return {saturate01(r), saturate01(g), saturate01(b)}; }
 
 [[noreturn]] void badParam(std::string_view algo, const std::string& what);
 void requireLayers(std::string_view algo, const AlgorithmParams& p);
@@ -117,5 +123,11 @@ std::unique_ptr<OitAlgorithm> makeWavg(const AlgorithmParams&);
 std::unique_ptr<OitAlgorithm> makeWboit(const AlgorithmParams&);
 std::unique_ptr<OitAlgorithm> makeSlab(const AlgorithmParams&);
 std::unique_ptr<OitAlgorithm> makeStochastic(const AlgorithmParams&);
+std::unique_ptr<OitAlgorithm> makeMlcb(const AlgorithmParams&);
+
+// mlcb's alpha-to-coverage mask of a fragment: floor(a b) or ceil(a b) bits
+// (stochastic rounding) at hashed positions, bits in 1..64. Exposed so tests
+// can build an independent screen-door oracle from the same masks.
+uint64_t mlcbCoverageMask(const Fragment& f, unsigned bits, uint64_t seed);
 
 }  // namespace oit::model::detail

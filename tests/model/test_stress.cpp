@@ -76,25 +76,6 @@ void expectNear(const Rgb& got, const Rgb& want, double tol, const std::string& 
   EXPECT_NEAR(got.b, want.b, tol) << what << " (blue)";
 }
 
-// ---------------------------------------------------------------- known bugs
-// Rows matching exactly the signature of a reported, still-open bug in the
-// algorithms (model/, not ours to fix). The per-case test below does not fail
-// on them; instead the one KnownBug_* test per bug at the end of this file
-// fails for as long as any row shows it, so each bug is one red test.
-//  - "wboit-range": wboit divides by clamp(sum w a, 1e-4, 5e4) and does not
-//    clamp its result; once sum w a > 5e4 the colour is scaled above 1.
-//  - "row-quantisation": unorm8 / fp16 rows round premultiplied colour and T
-//    independently, so A + T can exceed 1 by one code (1/255 or one fp16
-//    ulp) and colour-1 layers over a white background resolve above 1.
-std::string knownBug(const StressRow& r) {
-  if (r.non_finite || !r.balanced || r.status == RowStatus::Error || r.min_value < 0.0) return "";
-  if (r.algorithm == "wboit" && r.out_of_range) return "wboit-range";
-  const bool rows = r.algorithm == "mlab" || r.algorithm == "kbuffer" || r.algorithm == "hybrid";
-  if (rows && r.format != "fp32" && r.out_of_range && r.max_value <= 1.0 + 1.0 / 255.0 + 1e-6)
-    return "row-quantisation";
-  return "";
-}
-
 // ---------------------------------------------------------------- per case
 class StressCaseTest : public ::testing::TestWithParam<std::string> {};
 
@@ -111,7 +92,6 @@ TEST_P(StressCaseTest, EveryAlgorithmFiniteInRangeAndBalanced) {
       continue;
     }
     if (r.format == "fp32") ranFp32.insert(r.algorithm);
-    if (!knownBug(r).empty()) continue;  // fails in its KnownBug_* test instead
     EXPECT_NE(r.status, RowStatus::Error) << who(r) << ": " << r.note;
     EXPECT_EQ(r.non_finite, 0u) << who(r) << " produced NaN/Inf: " << r.note;
     EXPECT_EQ(r.out_of_range, 0u) << who(r) << " left [0,1] (min " << r.min_value << ", max " << r.max_value
@@ -393,47 +373,36 @@ TEST(StressExact, WboitUniformColourBelowClampIsExact) {
   }
 }
 
-// ---------------------------------------------------------------- known bugs
-// KNOWN BUG (reported; model/AlgorithmsWeighted.cpp, Wboit::resolve): the
-// colour is A.rgb / clamp(A.a, 1e-4, 5e4) (1 - R) + C_bg R with no clamp of
-// the result, so once sum w a > 5e4 (17 alpha-1 fragments at the 3e3 weight
-// cap; any deep pixel) the output leaves [0,1]: 64 fragments of colour
-// (1, .5, .25) give 3.84 in fp32 and 1.31 (65504 / 5e4) in fp16. Fails until
-// fixed (e.g. divide by max(A.a, 1e-4) and clamp the ratio to 1).
-TEST(StressKnownBug, KnownBug_WboitOutputStaysInUnitRange) {
+// ---------------------------------------------------------------- saturation
+// The final colour write saturates to [0,1] (model/AlgorithmDetail.hpp). These
+// two cases once left the range; they pin the saturated values.
+
+// wboit as published divides by clamp(sum w a, 1e-4, 5e4): 64 alpha-1
+// fragments of colour (1, .5, .25) at z = 0 with eq. 10 weigh 3e3 each, so
+// A = 192000 (1, .5, .25, 1), A.a clamps to 5e4 and the colour is
+// 3.84 (1, .5, .25) before the write saturates it; R = 0 hides the background.
+TEST(StressSaturation, WboitPublishedClampOvershootSaturates) {
   const StressCase c = makeCase("wboit_weight_max");
   AlgorithmParams p;
   p.weight = 10;
-  EXPECT_LE(render(c, "wboit", StorageFormat::Fp32, 4, p).at(0, 0).r, 1.0f) << "minimal case: 64 x alpha 1 at z 0";
-  StressOptions o;
-  o.algorithms = {"wboit"};
-  for (const StressRow& r : runStress(o))
-    if (r.status != RowStatus::NotApplicable) {
-      EXPECT_EQ(r.out_of_range, 0u) << who(r) << ": max " << r.max_value << "; " << r.note;
-    }
+  const Rgb got = render(c, "wboit", StorageFormat::Fp32, 4, p).at(0, 0);
+  EXPECT_EQ(got.r, 1.0f);
+  EXPECT_EQ(got.g, 1.0f);
+  EXPECT_FLOAT_EQ(got.b, 0.96f);
 }
 
-// KNOWN BUG (reported; encodeRow in model/StorageFormat.cpp, or the row
-// algorithms' resolve): unorm8 and fp16 rows quantise the premultiplied
-// colour a c and T = 1 - a independently, so a c + T can exceed 1. Minimal
-// case: one fragment, c = 1, a = 0.5, over a white background, mlab
-// rgba8t8z32: colour code 128 + T code 128 -> 256/255 = 1.0039. fp16: a = 1e-7
-// stores colour 1.19e-7 and T = 1 -> 1.00000012. Fails until fixed (e.g.
-// clamp the stored colour to 1 - decoded T, or clamp on resolve).
-TEST(StressKnownBug, KnownBug_QuantisedRowsStayInUnitRange) {
+// unorm8 and fp16 rows quantise a c and T = 1 - a independently: c = 1,
+// a = 0.5 over white stores colour code 128 and T code 128, 256/255 before
+// saturation; fp16 with a = 1e-7 keeps colour 1.19e-7 beside T = 1.
+TEST(StressSaturation, QuantisedRowsOverWhiteSaturateToOne) {
   StressCase one = makeCase("white_on_white");
   one.fragments = {Fragment{0, 0, 0.5f, 1, 1, 1, 0.5f, 0, kGlassDraw}};
-  const float u8 = render(one, "mlab", StorageFormat::Rgba8T8Z32, 4).at(0, 0).r;
-  EXPECT_LE(u8, 1.0f) << std::setprecision(9) << "minimal case, unorm8: " << u8;
+  EXPECT_EQ(render(one, "mlab", StorageFormat::Rgba8T8Z32, 4).at(0, 0).r, 1.0f);
+  // Below the overshoot nothing is clamped: c = 0 gives T code 128 alone.
+  one.fragments = {Fragment{0, 0, 0.5f, 0, 0, 0, 0.5f, 0, kGlassDraw}};
+  EXPECT_FLOAT_EQ(render(one, "mlab", StorageFormat::Rgba8T8Z32, 4).at(0, 0).r, 128.0f / 255.0f);
   one.fragments = {Fragment{0, 0, 0.5f, 1, 1, 1, 1e-7f, 0, kGlassDraw}};
-  const float h = render(one, "mlab", StorageFormat::Fp16, 4).at(0, 0).r;
-  EXPECT_LE(h, 1.0f) << std::setprecision(9) << "minimal case, fp16: " << h;
-  StressOptions o;
-  o.algorithms = {"mlab", "kbuffer", "hybrid"};
-  for (const StressRow& r : runStress(o))
-    if (r.status != RowStatus::NotApplicable) {
-      EXPECT_EQ(r.out_of_range, 0u) << who(r) << ": max " << r.max_value << "; " << r.note;
-    }
+  EXPECT_EQ(render(one, "mlab", StorageFormat::Fp16, 4).at(0, 0).r, 1.0f);
 }
 
 }  // namespace
