@@ -1,0 +1,127 @@
+// Set-associative, true-LRU, write-back tile cache with a bounded miss queue.
+// Policies and what counts as a hit: MEMORY.md.
+#include "oit_rop/BlendArrayCache.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace oit::rop {
+
+BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base_address,
+                                 MemorySystem& memory, bool fast_clear)
+    : cfg_(cfg), line_bytes_(line_bytes), tiles_(tiles), base_(base_address), memory_(memory), fast_clear_(fast_clear) {
+  if (line_bytes == 0) throw std::invalid_argument("BlendArrayCache: line_bytes must be > 0");
+  if (cfg.ways == 0) throw std::invalid_argument("BlendArrayCache: ways must be >= 1");
+  // A zero-entry miss queue could never serve a miss: the caller would stall forever.
+  if (cfg.miss_queue == 0) throw std::invalid_argument("BlendArrayCache: miss_queue must be >= 1");
+  // Capacity in lines; a cache smaller than one line still holds one line
+  // (documented in MEMORY.md) so the model always makes progress.
+  const uint64_t lines = std::max<uint64_t>(1, cfg.size_bytes / line_bytes);
+  ways_ = static_cast<uint32_t>(std::min<uint64_t>(cfg.ways, lines));  // fewer lines than ways: fully associative
+  const uint64_t sets = lines / ways_;  // a remainder of lines that cannot form a full set is dropped
+  if (sets > UINT32_MAX) throw std::invalid_argument("BlendArrayCache: too many sets");
+  sets_ = static_cast<uint32_t>(sets);
+  lines_.assign(size_t(sets_) * ways_, Line{});
+  touched_.assign(tiles, 0);
+  miss_queue_.assign(cfg.miss_queue, 0);
+}
+
+BlendArrayCache::Line* BlendArrayCache::find(uint32_t tile) {
+  Line* set = &lines_[size_t(tile % sets_) * ways_];
+  for (uint32_t w = 0; w < ways_; ++w)
+    if (set[w].tile == tile) return &set[w];
+  return nullptr;
+}
+
+const BlendArrayCache::Line* BlendArrayCache::find(uint32_t tile) const {
+  return const_cast<BlendArrayCache*>(this)->find(tile);
+}
+
+Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
+  if (tile >= tiles_) throw std::out_of_range("BlendArrayCache::acquire: tile out of range");
+  const Cycle hit_ready = now + cfg_.hit_latency;
+
+  if (Line* line = find(tile)) {
+    ++stats_.accesses;
+    ++stats_.hits;
+    line->stamp = ++stamp_;
+    if (write) {
+      line->dirty = true;
+      touched_[tile] = 1;
+    }
+    if (line->ready > hit_ready) {
+      ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
+      return line->ready;
+    }
+    return hit_ready;
+  }
+
+  // Miss: it needs a free miss-queue entry (one whose line is available by now).
+  uint32_t slot = cfg_.miss_queue;
+  uint32_t in_flight = 0;
+  for (uint32_t i = 0; i < cfg_.miss_queue; ++i) {
+    if (miss_queue_[i] > now)
+      ++in_flight;
+    else if (slot == cfg_.miss_queue)
+      slot = i;
+  }
+  if (slot == cfg_.miss_queue) {
+    ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
+    return kNever;
+  }
+  ++stats_.accesses;
+  ++stats_.misses;
+
+  // Victim: the first invalid way, else the least recently used.
+  Line* set = &lines_[size_t(tile % sets_) * ways_];
+  Line* victim = &set[0];
+  for (uint32_t w = 0; w < ways_; ++w) {
+    if (set[w].tile == kInvalid) {
+      victim = &set[w];
+      break;
+    }
+    if (set[w].stamp < victim->stamp) victim = &set[w];
+  }
+
+  Cycle ready = hit_ready;
+  if (victim->tile != kInvalid) {
+    ++stats_.evictions;
+    if (victim->dirty) {
+      ++stats_.writebacks;
+      ready = std::max(ready, memory_.access(now, lineAddress(victim->tile), line_bytes_, true, Surface::BlendArrays));
+    }
+  }
+  if (fast_clear_ && !touched_[tile]) {
+    ++stats_.clear_fills;  // the clear value is produced on chip
+  } else {
+    ready = std::max(ready, memory_.access(now, lineAddress(tile), line_bytes_, false, Surface::BlendArrays));
+  }
+
+  victim->tile = tile;
+  victim->dirty = write;
+  victim->stamp = ++stamp_;
+  victim->ready = ready;
+  if (write) touched_[tile] = 1;
+
+  miss_queue_[slot] = ready;
+  stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, in_flight + (ready > now ? 1u : 0u));
+  return ready;
+}
+
+bool BlendArrayCache::touched(uint32_t tile) const { return tile < tiles_ && touched_[tile]; }
+bool BlendArrayCache::resident(uint32_t tile) const { return tile < tiles_ && find(tile) != nullptr; }
+uint32_t BlendArrayCache::lineBytes() const { return line_bytes_; }
+uint32_t BlendArrayCache::lines() const { return static_cast<uint32_t>(lines_.size()); }
+uint32_t BlendArrayCache::ways() const { return ways_; }
+uint32_t BlendArrayCache::sets() const { return sets_; }
+uint32_t BlendArrayCache::tiles() const { return tiles_; }
+uint64_t BlendArrayCache::lineAddress(uint32_t tile) const { return base_ + uint64_t(tile) * line_bytes_; }
+const CacheStats& BlendArrayCache::stats() const { return stats_; }
+
+uint32_t BlendArrayCache::missesInFlight(Cycle now) const {
+  uint32_t n = 0;
+  for (Cycle c : miss_queue_) n += c > now ? 1u : 0u;
+  return n;
+}
+
+}  // namespace oit::rop

@@ -1,0 +1,84 @@
+// The ROP's tile cache of per-pixel blending arrays: one line holds one screen
+// tile's arrays (tile pixels x the algorithm's bytes per pixel); set-associative,
+// LRU, write-back, with a bounded miss queue. Misses and dirty evictions go to
+// the MemorySystem (surface BlendArrays).
+//
+// Fast clear: a tile never written in this frame is "clear" by a per-tile bit;
+// its first miss needs no DRAM read, and the resolve skips it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "oit_rop/MemorySystem.hpp"
+#include "oit_rop/RopConfig.hpp"
+#include "oit_rop/Types.hpp"
+
+namespace oit::rop {
+
+struct CacheStats {
+  uint64_t accesses = 0, hits = 0, misses = 0;
+  uint64_t clear_fills = 0;     // misses on never-written tiles served without DRAM (fast clear)
+  uint64_t evictions = 0, writebacks = 0;
+  uint64_t miss_queue_full = 0; // acquire() calls refused because the miss queue was full
+  uint32_t peak_misses_in_flight = 0;
+  // Added: hits on a line whose fill was still in flight (counted in `hits`
+  // too: the tag matched and no new DRAM traffic was made; the caller waits
+  // for the fill).
+  uint64_t hits_under_miss = 0;
+  double hitRate() const { return accesses ? double(hits) / double(accesses) : 0.0; }
+};
+
+class BlendArrayCache {
+ public:
+  // base_address: where the full-screen arrays start in DRAM; line i (tile i)
+  // lives at base_address + i * line_bytes.
+  BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base_address,
+                  MemorySystem& memory, bool fast_clear);
+
+  // A fragment of `tile` needs its pixel's array at cycle `now`. Returns the
+  // cycle the line is available (hit: now + hit_latency; miss: when the fill
+  // arrives, after any dirty victim was written back), or kNever when the miss
+  // queue is full (the caller stalls and retries: "cache-miss queue full").
+  // `write` marks the line dirty and the tile touched.
+  Cycle acquire(Cycle now, uint32_t tile, bool write);
+
+  bool touched(uint32_t tile) const;
+  bool resident(uint32_t tile) const;
+  uint32_t lineBytes() const;
+  uint32_t lines() const;  // capacity in lines
+  const CacheStats& stats() const;
+
+  // Added accessors.
+  uint32_t ways() const;  // effective associativity (<= cfg.ways)
+  uint32_t sets() const;
+  uint32_t tiles() const;
+  uint64_t lineAddress(uint32_t tile) const;  // base_address + tile * line_bytes
+  uint32_t missesInFlight(Cycle now) const;   // miss-queue entries whose line is not yet available
+
+ private:
+  static constexpr uint32_t kInvalid = ~uint32_t(0);
+  struct Line {
+    uint32_t tile = kInvalid;
+    bool dirty = false;
+    uint64_t stamp = 0;  // LRU: larger = more recently used
+    Cycle ready = 0;     // cycle the line's data is available
+  };
+  Line* find(uint32_t tile);
+  const Line* find(uint32_t tile) const;
+
+  CacheConfig cfg_;
+  uint32_t line_bytes_;
+  uint32_t tiles_;
+  uint64_t base_;
+  MemorySystem& memory_;
+  bool fast_clear_;
+  uint32_t ways_ = 1, sets_ = 1;
+  std::vector<Line> lines_;      // set-major: set * ways + way
+  std::vector<uint8_t> touched_; // per tile: written this frame
+  std::vector<Cycle> miss_queue_;  // per entry: cycle it frees (<= now: free)
+  uint64_t stamp_ = 0;
+  CacheStats stats_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,95 @@
+// The DRAM behind every ROP partition: channels with bandwidth, latency, banks
+// and an open-row policy (parameters: DramConfig, from the presets).
+//
+// Reservation style, no event queue: access() books the request on its channel
+// and bank at the requested cycle and returns the cycle its data is delivered
+// (read) or written (write). Requests must arrive with non-decreasing `now` per
+// caller; different callers (partitions running ahead within a SystemC quantum)
+// may interleave slightly out of order, which the model tolerates.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "oit_rop/RopConfig.hpp"
+#include "oit_rop/Types.hpp"
+
+namespace oit::rop {
+
+struct MemoryStats {
+  std::array<uint64_t, kSurfaceCount> read_bytes{};
+  std::array<uint64_t, kSurfaceCount> write_bytes{};
+  uint64_t requests = 0;
+  uint64_t row_hits = 0, row_misses = 0;
+  std::vector<Cycle> channel_busy;  // core cycles each channel's data bus was busy
+  Cycle last_completion = 0;
+  uint64_t readBytes() const;
+  uint64_t writeBytes() const;
+};
+
+class MemorySystem {
+ public:
+  MemorySystem(const DramConfig& cfg, double core_mhz);
+  // Books a transfer of `bytes` at `addr` (split into bursts, interleaved over
+  // channels by interleave_bytes). Returns the completion cycle (>= now + latency).
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s);
+  const MemoryStats& stats() const;
+  // Peak bytes per core cycle the channels can move together.
+  double peakBytesPerCycle() const;
+
+  // Added accessors (derived timing, for tests, reports and callers that
+  // want the unloaded latency). Cycles are the exact fractional values the
+  // model books with (sub-cycle fixed point, see MEMORY.md).
+  unsigned channels() const { return static_cast<unsigned>(bus_free_.size()); }
+  double bytesPerCyclePerChannel() const;
+  double controllerCycles() const;
+  double clCycles() const;
+  double trcdCycles() const;
+  double trpCycles() const;
+  double burstCycles() const;  // data-bus time of one burst
+  // Address mapping (MEMORY.md): channel, bank and row of a byte address.
+  unsigned channelOf(uint64_t addr) const;
+  unsigned bankOf(uint64_t addr) const;
+  uint64_t rowOf(uint64_t addr) const;
+
+ private:
+  // Time inside the model is kept in ticks: 1 core cycle = 2^kTickShift ticks,
+  // so fractional DRAM timings and bandwidths do not accumulate rounding.
+  static constexpr unsigned kTickShift = 16;
+  static constexpr uint64_t kNoRow = ~uint64_t(0);
+
+  // Division by a configuration constant; a shift/mask when it is a power of two.
+  struct Divisor {
+    uint64_t d = 1;
+    int shift = 0;  // -1: not a power of two
+    void set(uint64_t v);
+    uint64_t div(uint64_t x) const { return shift >= 0 ? x >> shift : x / d; }
+    uint64_t mod(uint64_t x) const { return shift >= 0 ? x & (d - 1) : x % d; }
+  };
+
+  struct Bank {
+    uint64_t open_row = kNoRow;  // open-row policy only
+    uint64_t row_ready = 0;      // ticks: the open row accepts column commands
+    uint64_t last_end = 0;       // ticks: end of the last data transfer of this bank
+    uint64_t act_ready = 0;      // ticks: closed-row policy, precharged and ready to activate
+  };
+
+  struct Location {
+    unsigned channel;
+    unsigned bank;
+    uint64_t row;
+  };
+  Location locate(uint64_t addr) const;
+
+  DramConfig cfg_;
+  double core_mhz_ = 0;
+  uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, burst_ticks_ = 0;
+  Divisor burst_div_, interleave_div_, channel_div_, row_div_, bank_div_;
+  std::vector<uint64_t> bus_free_;    // ticks, per channel
+  std::vector<uint64_t> busy_ticks_;  // ticks, per channel
+  std::vector<Bank> banks_;           // channel-major: channel * banks + bank
+  MemoryStats stats_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,294 @@
+// DRAM model: expectations are derived by hand from the formulas in
+// oit_rop/MEMORY.md, mostly on a "round" configuration where every timing is a
+// whole number of core cycles (1000 MHz core, tCK 1 ns, 16 B per cycle).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "oit_rop/MemorySystem.hpp"
+
+namespace oit::rop {
+namespace {
+
+// 1 core cycle = 1 ns = 1 DRAM clock; 16 GB/s = 16 B/cycle -> a 64 B burst is 4
+// cycles; controller 40, CL = tRCD = tRP = 11 cycles.
+DramConfig roundConfig(unsigned channels) {
+  DramConfig c;
+  c.channels = channels;
+  c.channel_gbps = 16.0;
+  c.tck_ns = 1.0;
+  c.cl = c.trcd = c.trp = 11;
+  c.banks = 8;
+  c.row_bytes = 8192;
+  c.burst_bytes = 64;
+  c.interleave_bytes = 256;
+  c.open_row = true;
+  c.controller_ns = 40.0;
+  return c;
+}
+constexpr double kRoundMhz = 1000.0;
+constexpr Cycle kCtrl = 40, kCl = 11, kTrcd = 11, kTrp = 11, kBurst = 4;
+
+TEST(MemorySystem, DerivedTimingsOfRoundConfig) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  EXPECT_DOUBLE_EQ(m.bytesPerCyclePerChannel(), 16.0);
+  EXPECT_DOUBLE_EQ(m.peakBytesPerCycle(), 32.0);
+  EXPECT_DOUBLE_EQ(m.controllerCycles(), 40.0);
+  EXPECT_DOUBLE_EQ(m.clCycles(), 11.0);
+  EXPECT_DOUBLE_EQ(m.burstCycles(), 4.0);
+}
+
+TEST(MemorySystem, IgpuPresetConversions) {
+  // DDR3-1600 at 1150 MHz core: 12.8 GB/s -> 11.13 B/cycle, a 64 B burst 5.75
+  // cycles, 11 tCK of 1.25 ns = 13.75 ns = 15.8125 cycles, 40 ns = 46 cycles.
+  MemorySystem m(DramConfig{}, 1150.0);
+  EXPECT_NEAR(m.bytesPerCyclePerChannel(), 12.8e9 / 1150e6, 1e-12);
+  EXPECT_NEAR(m.peakBytesPerCycle(), 2 * 12.8e9 / 1150e6, 1e-12);
+  EXPECT_DOUBLE_EQ(m.burstCycles(), 5.75);
+  EXPECT_DOUBLE_EQ(m.clCycles(), 15.8125);
+  EXPECT_DOUBLE_EQ(m.controllerCycles(), 46.0);
+  // Closed bank: ceil(46 + 2 * 15.8125 + 5.75) = ceil(83.375) = 84.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 84u);
+}
+
+TEST(MemorySystem, SingleReadLatencyClosedBankRowHitAndRowMiss) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  // Nothing open yet: controller + tRCD + CL + one burst.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);
+  // Same row (bank 0, row 0), long after: controller + CL + burst.
+  EXPECT_EQ(m.access(1000, 64, 64, false, Surface::Depth), 1000 + kCtrl + kCl + kBurst);
+  // Bank 0, row 1 (1 channel: 8 banks x 8 KiB per row index): precharge too.
+  ASSERT_EQ(m.bankOf(65536), 0u);
+  ASSERT_EQ(m.rowOf(65536), 1u);
+  EXPECT_EQ(m.access(2000, 65536, 64, false, Surface::Depth), 2000 + kCtrl + kTrp + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 1u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().requests, 3u);
+  EXPECT_EQ(m.stats().last_completion, 2000 + kCtrl + kTrp + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, WritesUseTheSameLatency) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, true, Surface::Colour), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().write_bytes[unsigned(Surface::Colour)], 64u);
+  EXPECT_EQ(m.stats().readBytes(), 0u);
+}
+
+TEST(MemorySystem, PartialBurstCostsAFullBurstButCountsExactBytes) {
+  // DRAM moves whole bursts: 32 B take a 64 B burst's bus time.
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 32, false, Surface::Resolve), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().channel_busy[0], kBurst);
+  EXPECT_EQ(m.stats().read_bytes[unsigned(Surface::Resolve)], 32u);
+  // 64 B straddling a burst boundary are two bursts.
+  m.access(1000, 96, 64, false, Surface::Resolve);
+  EXPECT_EQ(m.stats().channel_busy[0], 3 * kBurst);
+}
+
+TEST(MemorySystem, MovingBytesTakesAtLeastBytesOverBandwidth) {
+  for (unsigned channels : {1u, 2u, 4u}) {
+    for (uint32_t bytes : {64u * 1024u, 256u * 1024u, 1024u * 1024u, 4096u * 1024u}) {
+      MemorySystem m(roundConfig(channels), kRoundMhz);
+      const Cycle done = m.access(0, 0, bytes, false, Surface::BlendArrays);
+      const double lower = bytes / m.peakBytesPerCycle();
+      EXPECT_GE(double(done), lower) << channels << " ch, " << bytes << " B";
+      // Open rows, row-major mapping: every row change of a bank is hidden behind
+      // the other banks' transfers, so the bus never idles after the first
+      // activate: done = controller + tRCD + CL + bytes / peak, exactly.
+      EXPECT_EQ(done, kCtrl + kTrcd + kCl + Cycle(lower)) << channels << " ch, " << bytes << " B";
+      for (unsigned c = 0; c < channels; ++c) EXPECT_EQ(m.stats().channel_busy[c], Cycle(lower));
+    }
+  }
+}
+
+TEST(MemorySystem, BandwidthBoundHoldsForManySmallRequestsOnIgpuPreset) {
+  // 4096 back-to-back 64 B reads issued in the same cycle: the two channels at
+  // 11.13 B/cycle each cannot finish before bytes / peak cycles.
+  for (unsigned channels : {1u, 2u}) {
+    DramConfig c;
+    c.channels = channels;
+    MemorySystem m(c, 1150.0);
+    Cycle done = 0;
+    for (uint64_t i = 0; i < 4096; ++i) done = std::max(done, m.access(0, i * 64, 64, false, Surface::BlendArrays));
+    const double lower = 4096.0 * 64 / m.peakBytesPerCycle();
+    EXPECT_GE(double(done), lower);
+    EXPECT_LE(double(done), lower + 100.0);  // plus one unloaded latency (~84), not more
+    EXPECT_EQ(m.stats().last_completion, done);
+  }
+}
+
+TEST(MemorySystem, OpenRowBeatsClosedRowOnASequentialStream) {
+  // 8 KiB, 1 channel: one row of bank 0, 128 bursts.
+  DramConfig open_cfg = roundConfig(1);
+  DramConfig closed_cfg = open_cfg;
+  closed_cfg.open_row = false;
+  MemorySystem open(open_cfg, kRoundMhz), closed(closed_cfg, kRoundMhz);
+  // Open: one activate, then the bus streams 128 bursts.
+  EXPECT_EQ(open.access(0, 0, 8192, false, Surface::Depth), kCtrl + kTrcd + kCl + 128 * kBurst);
+  // Closed: every burst activates bank 0 again after the previous burst's data
+  // and auto-precharge: first burst ends at tRCD+CL+burst, each further one
+  // tRP + tRCD + CL + burst later.
+  EXPECT_EQ(closed.access(0, 0, 8192, false, Surface::Depth),
+            kCtrl + (kTrcd + kCl + kBurst) + 127 * (kTrp + kTrcd + kCl + kBurst));
+  EXPECT_EQ(open.stats().row_hits, 127u);
+  EXPECT_EQ(open.stats().row_misses, 1u);
+  EXPECT_EQ(closed.stats().row_hits, 0u);
+  EXPECT_EQ(closed.stats().row_misses, 128u);
+  // Closed policy, isolated access to the row just used: tRCD + CL, never a hit.
+  EXPECT_EQ(closed.access(100000, 0, 64, false, Surface::Depth), 100000 + kCtrl + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, RowHitsOfASequentialStreamCountedByHand) {
+  // 2 channels, 64 KiB as 1024 requests of 64 B: each channel gets 32 KiB of
+  // its local space = 4 rows (banks 0..3, row 0): 8 misses, 1016 hits.
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  for (uint64_t i = 0; i < 1024; ++i) m.access(i, i * 64, 64, false, Surface::BlendArrays);
+  EXPECT_EQ(m.stats().row_misses, 8u);
+  EXPECT_EQ(m.stats().row_hits, 1016u);
+  EXPECT_EQ(m.stats().requests, 1024u);
+
+  // 1 channel, 128 KiB: row 0 of all 8 banks, then row 1 of all 8 banks.
+  MemorySystem one(roundConfig(1), kRoundMhz);
+  one.access(0, 0, 128 * 1024, false, Surface::BlendArrays);
+  EXPECT_EQ(one.stats().row_misses, 16u);
+  EXPECT_EQ(one.stats().row_hits, 2048u - 16u);
+}
+
+TEST(MemorySystem, AddressMapping) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  // Channel from the interleave bits.
+  EXPECT_EQ(m.channelOf(0), 0u);
+  EXPECT_EQ(m.channelOf(255), 0u);
+  EXPECT_EQ(m.channelOf(256), 1u);
+  EXPECT_EQ(m.channelOf(3 * 256 + 17), 3u);
+  EXPECT_EQ(m.channelOf(4 * 256), 0u);
+  // Channel-local address 8192 (bank 1) = global chunk 32 * 4 -> 32768.
+  EXPECT_EQ(m.bankOf(32767), 0u);
+  EXPECT_EQ(m.bankOf(32768), 1u);
+  EXPECT_EQ(m.rowOf(32768), 0u);
+  // Local 8 banks * 8 KiB = 64 KiB -> row 1 of bank 0 at global 256 KiB.
+  EXPECT_EQ(m.bankOf(256 * 1024), 0u);
+  EXPECT_EQ(m.rowOf(256 * 1024), 1u);
+  EXPECT_EQ(m.channelOf(256 * 1024), 0u);
+}
+
+TEST(MemorySystem, NonPowerOfTwoGeometryMapsConsistently) {
+  DramConfig c = roundConfig(3);
+  c.banks = 6;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.channelOf(5 * 256), 2u);
+  // Local 6 * 8 KiB = 48 KiB per row index; global = local * 3.
+  EXPECT_EQ(m.rowOf(3 * 48 * 1024), 1u);
+  EXPECT_EQ(m.bankOf(3 * 48 * 1024), 0u);
+  EXPECT_EQ(m.bankOf(3 * 8 * 1024), 1u);
+  m.access(0, 0, 3 * 48 * 1024, false, Surface::Depth);
+  EXPECT_EQ(m.stats().row_misses, 3u * 6u);
+  for (unsigned ch = 0; ch < 3; ++ch) EXPECT_EQ(m.stats().channel_busy[ch], 48u * 1024u / 16u);
+}
+
+TEST(MemorySystem, InterleaveSpreadsAStreamEvenly) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  for (uint64_t i = 0; i < 256; ++i) m.access(i, i * 256, 256, false, Surface::BlendArrays);
+  // 64 KiB over 4 channels: 16 KiB each = 1024 cycles of bus at 16 B/cycle.
+  for (unsigned c = 0; c < 4; ++c) EXPECT_EQ(m.stats().channel_busy[c], 1024u) << "channel " << c;
+}
+
+TEST(MemorySystem, OneInterleaveChunkTouchesOneChannel) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  m.access(0, 2 * 256, 256, false, Surface::Depth);
+  EXPECT_EQ(m.stats().channel_busy[0], 0u);
+  EXPECT_EQ(m.stats().channel_busy[1], 0u);
+  EXPECT_EQ(m.stats().channel_busy[2], 4 * kBurst);
+  EXPECT_EQ(m.stats().channel_busy[3], 0u);
+}
+
+TEST(MemorySystem, BytesBySurfaceAreExact) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  m.access(0, 0, 100, false, Surface::BlendArrays);
+  m.access(1, 30, 7, false, Surface::BlendArrays);
+  m.access(2, 4096, 2048, true, Surface::BlendArrays);
+  m.access(3, 1 << 20, 333, false, Surface::Depth);
+  m.access(4, 1 << 21, 64, true, Surface::Colour);
+  m.access(5, 1 << 22, 1000, true, Surface::Resolve);
+  m.access(6, 1 << 22, 1, false, Surface::Resolve);
+  const MemoryStats& s = m.stats();
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::BlendArrays)], 107u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::BlendArrays)], 2048u);
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::Depth)], 333u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Depth)], 0u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Colour)], 64u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Resolve)], 1000u);
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::Resolve)], 1u);
+  EXPECT_EQ(s.readBytes(), 107u + 333u + 1u);
+  EXPECT_EQ(s.writeBytes(), 2048u + 64u + 1000u);
+  EXPECT_EQ(s.requests, 7u);
+}
+
+TEST(MemorySystem, ZeroBytesIsANoOp) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(77, 0, 0, false, Surface::Depth), 77u);
+  EXPECT_EQ(m.stats().requests, 0u);
+  EXPECT_EQ(m.stats().channel_busy[0], 0u);
+}
+
+TEST(MemorySystem, EarlierNowQueuesBehindTheBusWithoutGoingBackInTime) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  // 4 KiB from 0 spans both channels: 2 KiB each = 128 bus cycles.
+  const Cycle first = m.access(1000, 0, 4096, false, Surface::BlendArrays);
+  EXPECT_EQ(first, 1000 + kCtrl + kTrcd + kCl + 128);
+  // A request from another partition stamped earlier, same channel and row:
+  // its column command can issue once the row is open, but the data bus is
+  // booked until `first`: it queues behind, one burst later.
+  const Cycle late = m.access(0, 8192, 64, false, Surface::BlendArrays);  // channel 0, local 4096, bank 0 row 0
+  ASSERT_EQ(m.channelOf(8192), 0u);
+  EXPECT_EQ(late, first + kBurst);
+  EXPECT_EQ(m.stats().last_completion, late);
+  EXPECT_EQ(m.stats().row_hits, 64u - 2u + 1u);  // 62 hits in the stream, then this one
+}
+
+TEST(MemorySystem, EarlierNowOnAnIdleChannelIsNotDelayed) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  const Cycle first = m.access(1000, 0, 256, false, Surface::BlendArrays);  // channel 0 only
+  EXPECT_EQ(first, 1000 + kCtrl + kTrcd + kCl + 4 * kBurst);
+  EXPECT_EQ(m.access(0, 256, 64, false, Surface::BlendArrays), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().last_completion, first);  // the maximum, not the latest call
+}
+
+TEST(MemorySystem, EarlierNowOnABusyBankDoesNotGoBackInTime) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  const Cycle first = m.access(1000, 0, 64, false, Surface::Depth);  // bank 0 row 0
+  // Earlier request to bank 0 row 1: the precharge cannot start before row 0
+  // was opened and its transfer ended.
+  const Cycle late = m.access(0, 65536, 64, false, Surface::Depth);
+  EXPECT_EQ(late, first + kTrp + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, RejectsInvalidGeometry) {
+  DramConfig c = roundConfig(1);
+  c.interleave_bytes = 96;  // not a multiple of the burst
+  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  c = roundConfig(1);
+  c.channels = 0;
+  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  c = roundConfig(1);
+  EXPECT_THROW(MemorySystem(c, 0.0), std::invalid_argument);
+}
+
+TEST(MemorySystem, Deterministic) {
+  auto run = [] {
+    MemorySystem m(DramConfig{}, 1150.0);
+    uint64_t x = 12345, sum = 0;
+    for (int i = 0; i < 20000; ++i) {
+      x = x * 6364136223846793005ull + 1442695040888963407ull;
+      const uint64_t addr = (x >> 20) % (64u << 20);
+      const uint32_t bytes = uint32_t(1 + (x >> 50) % 4096);
+      sum = sum * 31 + m.access(uint64_t(i) * 3, addr, bytes, (x >> 7) & 1, Surface((x >> 9) & 3));
+    }
+    return std::pair{sum, m.stats().row_hits};
+  };
+  EXPECT_EQ(run(), run());
+}
+
+}  // namespace
+}  // namespace oit::rop
