@@ -13,6 +13,7 @@ void addConvertCommand(CLI::App& app);  // oitsim convert IN OUT
 void addRunCommand(CLI::App& app);      // oitsim run --trace T ...
 void addScenesCommand(CLI::App& app);   // oitsim scenes
 void addStressCommand(CLI::App& app);   // oitsim stress [--out DIR]
+void addConfigCommand(CLI::App& app);   // oitsim config [--preset P] [--config F] [--set a.b=v]
 
 // The command line as typed (recorded in reports so a run can be repeated).
 void setCommandLine(int argc, char* argv[]);

@@ -19,6 +19,7 @@ extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::addConvertCommand(app);
   oit::cli::addRunCommand(app);
   oit::cli::addStressCommand(app);
+  oit::cli::addConfigCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
