@@ -8,14 +8,25 @@
 //   raster  - pixel after pixel, all L fragments of a pixel back to back
 //             (best cache locality for the per-pixel state).
 // Best of N timed renders after nothing else (the scene is generated first).
+// `layered` is what the issue calls a raster-order trace: every draw covers
+// the screen in row order, one draw after another (e.g. --width 1280
+// --height 720 --layers 8 --order layered: 7.4 M fragments).
+//
+// --trace FILE renders a trace file (openTrace) instead of the synthetic
+// scene, two ways: `file` re-reads and decodes the trace in every render
+// (end to end, as oitsim run does) and `memory` reads it once into a
+// MemorySource first (the model alone). Mfrag/s counts all records of the
+// trace (opaque ones included) per render.
 //
 //   bench_functional [--algos all|a,b,...] [--k 4] [--format fp32|fp16|rgba8t8z32]
-//                    [--size 256] [--layers 40] [--bits 32] [--order both|layered|raster]
-//                    [--reps 3]
+//                    [--size 256] [--width W] [--height H] [--layers 40] [--bits 32]
+//                    [--order both|layered|raster] [--reps 3]
+//                    [--trace FILE] [--trace-mode both|file|memory]
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,6 +34,7 @@
 #include "model/FunctionalRenderer.hpp"
 #include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
+#include "traces/TraceIO.hpp"
 
 using namespace oit;
 using namespace oit::model;
@@ -73,16 +85,77 @@ double checksum(const Image& img) {
 [[noreturn]] void usage(const char* argv0, const std::string& why) {
   std::fprintf(stderr,
                "%s\nusage: %s [--algos all|a,b,...] [--k 4] [--format fp32|fp16|rgba8t8z32] [--size 256]\n"
-               "       [--layers 40] [--bits 32] [--order both|layered|raster] [--reps 3]\n",
+               "       [--width W] [--height H] [--layers 40] [--bits 32] [--order both|layered|raster]\n"
+               "       [--reps 3] [--trace FILE] [--trace-mode both|file|memory]\n",
                why.c_str(), argv0);
   std::exit(2);
+}
+
+// Best-of-reps render of one algorithm; `source` makes a fresh (rewound) source per rep.
+struct Timed {
+  double best = 1e300;
+  RenderResult r;
+};
+Timed timeRenders(unsigned reps, OitAlgorithm& algo, const std::function<FragmentSource&()>& source) {
+  Timed t;
+  for (unsigned rep = 0; rep < reps; ++rep) {
+    FragmentSource& src = source();
+    const auto t0 = std::chrono::steady_clock::now();
+    t.r = FunctionalRenderer().render(src, algo);
+    t.best = std::min(t.best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return t;
+}
+
+int runTrace(const std::string& path, const std::string& mode, const std::vector<std::string>& names,
+             const AlgorithmParams& params, unsigned reps, const std::string& format) {
+  std::unique_ptr<FragmentSource> file;
+  try {
+    file = openTrace(path);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+  const TraceHeader hdr = file->header();
+  std::unique_ptr<MemorySource> mem;
+  if (mode != "file") {  // read once, untimed
+    std::vector<Fragment> fs;
+    fs.reserve(hdr.fragment_count);
+    for (auto b = file->next(); !b.empty(); b = file->next()) fs.insert(fs.end(), b.begin(), b.end());
+    mem = std::make_unique<MemorySource>(hdr, std::move(fs));
+  }
+  std::printf("# trace %s: %ux%u, %llu records, k=%u, format %s, bits %u, best of %u\n", path.c_str(), hdr.width,
+              hdr.height, static_cast<unsigned long long>(hdr.fragment_count), params.layers, format.c_str(),
+              params.bits, reps);
+  std::printf("%-10s %-8s %7s %6s %9s %12s %14s %14s\n", "algorithm", "source", "passes", "B/px", "best s",
+              "Mfrag/s", "Mfrag-pass/s", "checksum");
+  for (const std::string m : {"file", "memory"}) {
+    if (mode != "both" && mode != m) continue;
+    for (const std::string& name : names) {
+      std::unique_ptr<OitAlgorithm> algo;
+      try {
+        algo = makeAlgorithm(name, params);
+      } catch (const std::invalid_argument& e) {
+        std::printf("%-10s %-8s n/a (%s)\n", name.c_str(), m.c_str(), e.what());
+        continue;
+      }
+      FragmentSource& src = m == "file" ? *file : static_cast<FragmentSource&>(*mem);
+      const Timed t = timeRenders(reps, *algo, [&]() -> FragmentSource& { return src; });  // render() rewinds
+      const double n = double(t.r.counts.fragments_in);
+      std::printf("%-10s %-8s %7u %6u %9.3f %12.2f %14.2f %14.6f\n", name.c_str(), m.c_str(),
+                  t.r.counts.source_passes, algo->bytesPerPixel(), t.best, n / t.best / 1e6,
+                  n * t.r.counts.source_passes / t.best / 1e6, checksum(t.r.image));
+      std::fflush(stdout);
+    }
+  }
+  return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string algos = "all", format = "fp32", order = "both";
-  unsigned k = 4, size = 256, layers = 40, bits = 32, reps = 3;
+  std::string algos = "all", format = "fp32", order = "both", trace, traceMode = "both";
+  unsigned k = 4, size = 256, width = 0, height = 0, layers = 40, bits = 32, reps = 3;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (i + 1 >= argc) usage(argv[0], "missing value after " + a);
@@ -97,13 +170,21 @@ int main(int argc, char** argv) {
     else if (a == "--k") k = num();
     else if (a == "--format") format = v;
     else if (a == "--size") size = num();
+    else if (a == "--width") width = num();
+    else if (a == "--height") height = num();
+    else if (a == "--trace") trace = v;
+    else if (a == "--trace-mode") traceMode = v;
     else if (a == "--layers") layers = num();
     else if (a == "--bits") bits = num();
     else if (a == "--order") order = v;
     else if (a == "--reps") reps = num();
     else usage(argv[0], "unknown option " + a);
   }
-  if (size > 4096) usage(argv[0], "--size must be <= 4096");
+  if (width == 0) width = size;
+  if (height == 0) height = size;
+  if (width > 4096 || height > 4096) usage(argv[0], "width and height must be <= 4096");
+  if (traceMode != "both" && traceMode != "file" && traceMode != "memory")
+    usage(argv[0], "bad --trace-mode " + traceMode);
   if (order != "both" && order != "layered" && order != "raster") usage(argv[0], "bad --order " + order);
   std::vector<std::string> names;
   if (algos == "all")
@@ -121,18 +202,20 @@ int main(int argc, char** argv) {
     usage(argv[0], e.what());
   }
 
+  if (!trace.empty()) return runTrace(trace, traceMode, names, params, reps, format);
+
   TraceHeader hdr;
-  hdr.width = size;
-  hdr.height = size;
+  hdr.width = width;
+  hdr.height = height;
   for (unsigned l = 0; l < layers; ++l) hdr.draws.push_back({1 + l, DrawClass::Transparent, "layer"});
 
-  std::printf("# %ux%u x %u layers = %zu fragments, k=%u, format %s, bits %u, best of %u\n", size, size, layers,
-              size_t(size) * size * layers, k, format.c_str(), bits, reps);
+  std::printf("# %ux%u x %u layers = %zu fragments, k=%u, format %s, bits %u, best of %u\n", width, height, layers,
+              size_t(width) * height * layers, k, format.c_str(), bits, reps);
   std::printf("%-10s %-8s %7s %6s %9s %12s %14s %14s\n", "algorithm", "order", "passes", "B/px", "best s",
               "Mfrag/s", "Mfrag-pass/s", "checksum");
   for (const std::string ord : {"layered", "raster"}) {
     if (order != "both" && order != ord) continue;
-    const std::vector<Fragment> fs = scene(size, size, layers, ord == "raster");
+    const std::vector<Fragment> fs = scene(width, height, layers, ord == "raster");
     for (const std::string& name : names) {
       std::unique_ptr<OitAlgorithm> algo;
       try {
@@ -141,14 +224,10 @@ int main(int argc, char** argv) {
         std::printf("%-10s %-8s n/a (%s)\n", name.c_str(), ord.c_str(), e.what());
         continue;
       }
-      double best = 1e300;
-      RenderResult r;
-      for (unsigned rep = 0; rep < reps; ++rep) {
-        MemorySource src(hdr, fs);
-        const auto t0 = std::chrono::steady_clock::now();
-        r = FunctionalRenderer().render(src, *algo);
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      }
+      MemorySource src(hdr, fs);
+      const Timed t = timeRenders(reps, *algo, [&]() -> FragmentSource& { return src; });  // render() rewinds
+      const double best = t.best;
+      const RenderResult& r = t.r;
       const double n = double(fs.size());
       std::printf("%-10s %-8s %7u %6u %9.3f %12.2f %14.2f %14.6f\n", name.c_str(), ord.c_str(),
                   r.counts.source_passes, algo->bytesPerPixel(), best, n / best / 1e6,

@@ -90,14 +90,23 @@ class Adaptive final : public OitAlgorithm {
     InsertOutcome o = InsertOutcome::Stored;
     if (n > k_) {
       // Node 0's predecessor is the implicit (vis 1) node, which the
-      // underestimate rule cannot modify: candidates are j >= 1. First
-      // minimum wins (deterministic).
+      // underestimate rule cannot modify: candidates are j >= 1.
+      // Key (area, step, -j), smallest first. Equal depths have zero area
+      // whatever their visibility, so the area alone cannot rank them; the
+      // step vis[j-1] - vis[j] is the visibility error the removal gives the
+      // fragments at node j's depth, so the smallest step goes, and of equal
+      // steps the last node (front nodes stay exact). Before this, "first
+      // minimum wins" removed node 1 again and again in an equal-depth stack,
+      // collapsing the front fragment's node to the whole stack's vis.
       unsigned best = 1;
       float bestArea = (vis[0] - vis[1]) * (z[1] - z[0]);
+      float bestStep = vis[0] - vis[1];
       for (unsigned j = 2; j < n; ++j) {
         const float area = (vis[j - 1] - vis[j]) * (z[j] - z[j - 1]);
-        if (area < bestArea) {
+        const float step = vis[j - 1] - vis[j];
+        if (area < bestArea || (area == bestArea && step <= bestStep)) {
           bestArea = area;
+          bestStep = step;
           best = j;
         }
       }

@@ -10,7 +10,8 @@
 // C = U (1 - T) / U1 + T C_bg.
 // Variants: continuous alpha (layers keep alpha; s = C_acc b and t = a b are
 // real, P is bilinearly interpolated in the (b+1)^2 table) and coverage masks
-// (layers keep a b-bit mask with round(a b) random bits, b <= 32).
+// (layers keep a b-bit mask with round(a b) random bits, b <= 32; inserted
+// iff (m_occl | m) != m_occl, the event P_b is the probability of).
 // Ties: each layer keeps its per-pixel submission index (seq) so an
 // equal-depth layer submitted later counts as in front, in both passes.
 #include <bit>
@@ -126,16 +127,20 @@ class Slab final : public OitAlgorithm {
     }
     if (p == k_) return InsertOutcome::Discarded;  // behind a full list
     uint32_t cov;
-    double P;
     if (mask_) {
+      // Explicit masks: the paper's own test (Sec. 4.2), insert iff the mask
+      // has a bit the layers in front do not cover. P_b is only the
+      // probability of this event for a mask nobody has drawn; drawing it
+      // from the counts with an independent xi would drop fragments whose
+      // actual mask is visible (biased against stochastic transparency).
       cov = coverageMask(f);
-      P = table_[std::popcount(occl) * (b_ + 1) + std::popcount(cov)];
+      if ((occl | cov) == occl) return InsertOutcome::Discarded;
     } else {
       cov = asWord(f.a);
-      P = probability((1.0 - keep) * b_, double(f.a) * b_);
+      const double P = probability((1.0 - keep) * b_, double(f.a) * b_);
+      const double xi = double(fragmentHash(f, seed_, 0) >> 11) * 0x1p-53;  // uniform [0,1)
+      if (!(xi < P)) return InsertOutcome::Discarded;
     }
-    const double xi = double(fragmentHash(f, seed_, 0) >> 11) * 0x1p-53;  // uniform [0,1)
-    if (!(xi < P)) return InsertOutcome::Discarded;
     const unsigned last = std::min(n, k_ - 1);  // a full list drops its furthest layer
     for (unsigned i = last; i > p; --i) {
       w[3 * i] = w[3 * (i - 1)];

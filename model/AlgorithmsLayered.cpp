@@ -3,6 +3,7 @@
 // fragment lands in front of stored rows of equal depth (the product's tie rule).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "model/AlgorithmDetail.hpp"
@@ -72,6 +73,7 @@ class Mlab final : public SortedRows {
   void clear(uint32_t* w) override { clearRows(w); }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
+    if (fmt_ == StorageFormat::Fp32) return insertFp32(w, f);
     LayerRow rows[kMaxLayers];
     loadRows(w, rows);
     unsigned first;
@@ -93,6 +95,35 @@ class Mlab final : public SortedRows {
     float r, g, b, T;
     composite(w, r, g, b, T);
     return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
+  }
+
+ private:
+  // The same insert in place on fp32 rows (raw LayerRow words): the rows are
+  // always sorted by z (`<=`; empty rows, +inf, last), so the bubble is
+  // "insert at the first row with f.z <= z, shift the rest down one, the
+  // last row falls off". Same float operations as the generic path, so the
+  // same bits (bench_functional's checksum and every mlab test unchanged);
+  // it only skips copying all k rows out and back.
+  InsertOutcome insertFp32(uint32_t* w, const Fragment& f) const {
+    constexpr unsigned kRw = 5;
+    unsigned p = 0;
+    while (p < n_ && !(f.z <= asFloat(w[p * kRw + 4]))) ++p;
+    const LayerRow fr = fragmentRow(f);
+    LayerRow out = fr;  // p == n_: the fragment itself falls off
+    if (p < n_) {
+      std::memcpy(&out, w + (n_ - 1) * kRw, sizeof out);
+      std::memmove(w + (p + 1) * kRw, w + p * kRw, size_t(n_ - 1 - p) * kRw * sizeof(uint32_t));
+      std::memcpy(w + p * kRw, &fr, sizeof fr);
+    }
+    if (out.z == kInf) return InsertOutcome::Stored;
+    LayerRow l;  // merge into the last row (eq. 7, 8; Z of the nearer)
+    std::memcpy(&l, w + (n_ - 1) * kRw, sizeof l);
+    l.r += out.r * l.t;
+    l.g += out.g * l.t;
+    l.b += out.b * l.t;
+    l.t *= out.t;
+    std::memcpy(w + (n_ - 1) * kRw, &l, sizeof l);
+    return InsertOutcome::Merged;
   }
 };
 

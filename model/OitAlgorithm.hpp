@@ -83,6 +83,8 @@ class OitAlgorithm {
   // resets shared storage (the A-buffer's node pool).
   virtual void beginFrame(const TraceHeader& header) {}
 
+  // Writes every one of the stateWords() words (callers need not zero them;
+  // FunctionalRenderer hands in uninitialised memory).
   virtual void clear(uint32_t* words) = 0;
   // One fragment (already known transparent and in front of the opaque depth)
   // in pass `pass` < passes(); the fragments of every pass arrive in

@@ -395,6 +395,37 @@ TEST(Hash, DeterministicAndSensitiveToEveryKeyField) {
   EXPECT_NE(fragmentHash(f, 1, 1), h);
 }
 
+// ---------------------------------------------------------------- adaptive
+// Stress-suite repro: more than k fragments at one depth. Every candidate
+// node has zero area there; removing node 1 each time ("first minimum wins")
+// left the front node with the whole stack's vis, so the second fragment was
+// shaded with vis 2^-8 (green 0.052). Now the smallest visibility step goes
+// (equal alphas: the last node), so the front k - 1 fragments stay exact.
+TEST(Adaptive, EqualDepthStackKeepsFrontNodesExact) {
+  // 8 fragments at z .5, a .5, green first, alternating: the last (red) is in front.
+  std::vector<Fragment> fs;
+  for (int i = 0; i < 8; ++i) fs.push_back(frag(0, 0, 0.5f, i % 2 ? 1.0f : 0.0f, i % 2 ? 0.0f : 1.0f, 0, 0.5f));
+  RenderOptions opt;
+  opt.clear_colour = {0.2f, 0.4f, 0.6f};
+  const double T = 1.0 / 256, bgR = 0.2f, bgG = 0.4f, bgB = 0.6f;
+  // Reference: front to back red, green, ... with vis 2^-i: red .5 + .125 +
+  // 2^-5 + 2^-7, green .25 + 2^-4 + 2^-6 + 2^-8, plus T bg.
+  const Rgb ref = render("abuffer", {}, fs, 1, 1, opt).image.pixels[0];
+  expectNear(ref, 0.6640625 + T * bgR, 0.33203125 + T * bgG, T * bgB, 1e-7, "reference");
+  // k = 4 keeps nodes (seq 7, 6, 5) exact: vis 1, .5, .25, then node seq 4
+  // holds vis .125 for seq 4 and the total 2^-8 for everything behind it:
+  // red .5 + .25 .5 + 2 (2^-8 .5), green .5 .5 + .125 .5 + 2 (2^-8 .5).
+  const Rgb got = render("adaptive", layers(4), fs, 1, 1, opt).image.pixels[0];
+  expectNear(got, 0.62890625 + T * bgR, 0.31640625 + T * bgG, T * bgB, 1e-7, "adaptive k 4");
+  // Underestimate property: never more visibility than the reference, and
+  // the total transmittance (blue = T bg) is exact.
+  EXPECT_LE(got.r, ref.r);
+  EXPECT_LE(got.g, ref.g);
+  EXPECT_EQ(got.b, ref.b);
+  // With k >= 8 nothing is removed: the reference.
+  expectNear(render("adaptive", layers(8), fs, 1, 1, opt).image.pixels[0], ref.r, ref.g, ref.b, 1e-7, "k 8");
+}
+
 // ---------------------------------------------------------------- slab
 TEST(Slab, BackToFrontWithEnoughLayersIsExact) {
   // Every new fragment is in front of all layers: nothing occludes it, P = 1
