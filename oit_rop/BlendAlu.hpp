@@ -1,0 +1,64 @@
+// BlendAlu: the blending-array read-modify-write unit. Throughput is
+// alu.blends_per_clock scaled by the row format (rgba8t8z32: 1, fp16:
+// fp16_rate, fp32: fp32_rate); latency is base_latency + row_latency x rows
+// touched, where rows comes from the functional InsertOutcome (rowsFor()).
+// Latencies take few distinct values, so completions sit in one in-order FIFO
+// per row count (no priority queue).
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "model/OitAlgorithm.hpp"
+#include "oit_rop/PipelineQueues.hpp"
+#include "oit_rop/RopConfig.hpp"
+
+namespace oit::rop {
+
+struct AluStats {
+  uint64_t blends = 0, rows = 0, dropped = 0;
+};
+
+class BlendAlu {
+ public:
+  // rows_max: the largest rows value issue() will get.
+  BlendAlu(const AluConfig& cfg, double format_rate, unsigned rows_max);
+
+  // Rows read-modify-written by one insert with `outcome`: Stored writes one
+  // row, Merged rewrites the whole array (merge / eviction), Discarded only
+  // compares. Without lazy merging (skip.lazy_merge = false) every kept
+  // fragment pays the merge. `array_rows` = the layout's rows (>= 1 used).
+  static unsigned rowsFor(model::InsertOutcome outcome, unsigned array_rows, bool lazy_merge);
+  static double formatRate(const AluConfig& cfg, const model::StateLayout& layout);
+
+  unsigned latency(unsigned rows) const { return cfg_.base_latency + cfg_.row_latency * rows; }
+  unsigned slots(Cycle now) { return rate_.available(now); }
+  Cycle nextSlot(Cycle now) const { return rate_.nextAvailable(now); }
+  // Starts one blend (or a drop of a late-culled fragment: rows = 0).
+  void issue(Cycle now, uint32_t token, unsigned rows, bool drop = false);
+  // Calls f(token) for each blend finishing at `now`.
+  template <class F>
+  void complete(Cycle now, F&& f) {
+    if (in_flight_ == 0) return;
+    for (auto& q : done_)
+      while (!q.empty() && q.front().first <= now) {
+        const uint32_t t = q.front().second;
+        q.pop();
+        --in_flight_;
+        f(t);
+      }
+  }
+  Cycle nextCompletion() const;
+  size_t inFlight() const { return in_flight_; }
+  const AluStats& stats() const { return stats_; }
+
+ private:
+  AluConfig cfg_;
+  RateLimiter rate_;
+  std::vector<Fifo<std::pair<Cycle, uint32_t>>> done_;  // index: rows
+  size_t in_flight_ = 0;
+  AluStats stats_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,54 @@
+#include "oit_rop/EarlyDepth.hpp"
+
+#include <algorithm>
+
+namespace oit::rop {
+
+EarlyDepth::EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t tile_bytes, uint64_t depth_base,
+                       MemoryPort& mem, unsigned depth_tiles)
+    : cfg_(cfg),
+      rate_(per_clock),
+      tile_bytes_(tile_bytes),
+      depth_base_(depth_base),
+      mem_(mem),
+      tag_(std::max(1u, depth_tiles), 0),
+      tag_ready_(std::max(1u, depth_tiles), 0),
+      q_(256) {}
+
+void EarlyDepth::push(Cycle now, uint32_t token, uint32_t tile, bool needs_read) {
+  ++stats_.tested;
+  const Cycle passed = now + cfg_.latency;
+  Cycle ready = passed;
+  if (needs_read) {
+    const size_t slot = tile % tag_.size();
+    if (tag_[slot] == tile + 1) {
+      ++stats_.depth_buffer_hits;
+    } else {
+      // The read starts when the fragment enters; its latency overlaps the stage's.
+      ++stats_.depth_reads;
+      tag_[slot] = tile + 1;
+      tag_ready_[slot] = mem_.access(now, depth_base_ + uint64_t(tile) * tile_bytes_, tile_bytes_, false,
+                                     Surface::Depth);
+    }
+    ready = std::max(ready, tag_ready_[slot]);
+  } else {
+    ++stats_.hiz_decided;
+  }
+  ready = std::max(ready, last_ready_);
+  last_ready_ = ready;
+  q_.push({token, ready, passed});
+}
+
+Cycle EarlyDepth::nextEvent(Cycle now) const {
+  if (q_.empty()) return kNever;
+  const Entry& h = q_.front();
+  // The head's status turns from busy (latency) to waiting (depth) at `passed`.
+  if (h.passed > now && h.passed < h.ready) return h.passed;
+  return std::max(h.ready, rate_.nextAvailable(now));
+}
+
+bool EarlyDepth::headWaitsForDepth(Cycle now) const {
+  return !q_.empty() && q_.front().ready > now && q_.front().passed <= now;
+}
+
+}  // namespace oit::rop

@@ -1,0 +1,70 @@
+// EarlyDepth: the depth test of transparent fragments against the opaque
+// depth, before the PixelLock. Whether a fragment is culled is decided by the
+// functional model (z >= final opaque depth); this stage only charges time and
+// traffic. A per-tile hierarchical Z (min and max opaque depth of the tile)
+// decides most fragments without reading depth: z < tile min -> in front of
+// every opaque pixel, z >= tile max -> behind all of them. Otherwise the
+// stage reads the tile's depth (Surface::Depth, tile pixels x 4 B) into a
+// small direct-mapped depth-tile buffer (`depth_tiles` entries, tags only).
+// In order: a fragment waiting for its depth tile blocks the ones behind it
+// ("cache-miss wait"). Throughput: `per_clock` fragments per cycle.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "oit_rop/PipelineQueues.hpp"
+#include "oit_rop/RopConfig.hpp"
+
+namespace oit::rop {
+
+struct EarlyDepthStats {
+  uint64_t tested = 0, depth_reads = 0, depth_buffer_hits = 0, hiz_decided = 0;
+};
+
+class EarlyDepth {
+ public:
+  EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t tile_bytes, uint64_t depth_base,
+             MemoryPort& mem, unsigned depth_tiles = 16);
+
+  // A shaded fragment arrives; `needs_read` = the HiZ could not decide it.
+  void push(Cycle now, uint32_t token, uint32_t tile, bool needs_read);
+  // Calls f(token) for each fragment leaving the stage at `now` (in order).
+  template <class F>
+  unsigned leave(Cycle now, F&& f) {
+    unsigned n = 0, slots = rate_.available(now);
+    while (n < slots && !q_.empty() && q_.front().ready <= now) {
+      const uint32_t t = q_.front().token;
+      q_.pop();
+      rate_.take();
+      ++n;
+      f(t);
+    }
+    return n;
+  }
+  // Earliest cycle > now at which leave() can move something (kNever if empty).
+  Cycle nextEvent(Cycle now) const;
+  // The stage's status at `now` after leave() moved `moved` fragments.
+  bool headWaitsForDepth(Cycle now) const;
+  size_t size() const { return q_.size(); }
+  const EarlyDepthStats& stats() const { return stats_; }
+
+ private:
+  struct Entry {
+    uint32_t token;
+    Cycle ready;   // when it may leave (latency, depth data)
+    Cycle passed;  // when the latency alone would let it leave
+  };
+  EarlyDepthConfig cfg_;
+  RateLimiter rate_;
+  uint32_t tile_bytes_;
+  uint64_t depth_base_;
+  MemoryPort& mem_;
+  std::vector<uint32_t> tag_;    // tile + 1 (0 = empty)
+  std::vector<Cycle> tag_ready_;
+  Fifo<Entry> q_;
+  Cycle last_ready_ = 0;  // in order: nobody leaves before the one ahead
+  EarlyDepthStats stats_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,166 @@
+#include "oit_rop/FrontEnd.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+namespace oit::rop {
+
+namespace {
+constexpr size_t kHighWatermark = size_t(1) << 20;  // records per partition backlog
+constexpr size_t kLowWatermark = kHighWatermark / 2;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+}  // namespace
+
+FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
+    : width(w), height(h), tile_w(p.tile_width), tile_h(p.tile_height), partitions(p.count) {
+  if (tile_w == 0 || tile_h == 0) throw std::invalid_argument("partitions.tile_width/tile_height must be > 0");
+  if (partitions == 0 || partitions > 255) throw std::invalid_argument("partitions.count must be in [1, 255]");
+  tiles_x = (w + tile_w - 1) / tile_w;
+  tiles_y = (h + tile_h - 1) / tile_h;
+  tile_col.resize(w);
+  tile_row.resize(h);
+  for (uint32_t x = 0; x < w; ++x) tile_col[x] = x / tile_w;
+  for (uint32_t y = 0; y < h; ++y) tile_row[y] = (y / tile_h) * tiles_x;
+  owner.resize(size_t(tiles_x) * tiles_y);
+  for (uint32_t ty = 0; ty < tiles_y; ++ty)
+    for (uint32_t tx = 0; tx < tiles_x; ++tx) owner[size_t(ty) * tiles_x + tx] = uint8_t((tx + ty) % partitions);
+}
+
+FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,
+                   const model::OpaqueLayer& opaque, const FrameGeometry& geo, const RopConfig& cfg)
+    : src_(src),
+      algo_(algo),
+      classes_(classes),
+      opaque_(opaque),
+      geo_(geo),
+      hierarchical_(cfg.early_depth.hierarchical),
+      words_(algo.stateWords()),
+      passes_(algo.passes()),
+      queues_(geo.partitions, Fifo<InRec>(1u << 12)) {
+  const size_t pixels = size_t(geo.width) * geo.height;
+  state_.resize(pixels * words_);
+  for (size_t p = 0; p < pixels; ++p) algo_.clear(state_.data() + p * words_);
+
+  // Hierarchical Z per tile from the final opaque depth (+inf where none landed).
+  const uint32_t tiles = geo.tiles();
+  hiz_min_.assign(tiles, kInf);
+  hiz_max_.assign(tiles, -kInf);
+  landed_.assign(tiles, 0);
+  tile_nodes_.assign(algo.bounded() ? 0 : tiles, 0);
+  for (uint32_t y = 0; y < geo.height; ++y)
+    for (uint32_t x = 0; x < geo.width; ++x) {
+      const size_t p = size_t(y) * geo.width + x;
+      const uint32_t t = geo.tileOf(x, y);
+      const float z = opaque.depth[p];
+      hiz_min_[t] = std::min(hiz_min_[t], z);
+      hiz_max_[t] = std::max(hiz_max_[t], z);
+      if (opaque.landed(p)) ++landed_[t];
+    }
+  // The opaque phase's work per partition: one scan of the trace.
+  opaque_per_part_.assign(geo.partitions, 0);
+  if (classes.anyOpaque()) {
+    src_.rewind();
+    ++source_reads_;
+    for (auto b = src_.next(); !b.empty(); b = src_.next())
+      for (const Fragment& f : b)
+        if (classes_.isOpaque(f.draw)) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
+  }
+  counts_.pass_outcomes.assign(passes_, {});
+  src_.rewind();
+  ++source_reads_;
+}
+
+bool FrontEnd::canRefill() const {
+  if (exhausted_) return false;
+  for (const auto& q : queues_)
+    if (q.size() >= kHighWatermark) return false;
+  return true;
+}
+
+void FrontEnd::popped(unsigned partition) {
+  if (waiters_ != 0 && queues_[partition].size() == kLowWatermark) {
+    waiters_ = 0;
+    drained_.notify(sc_core::SC_ZERO_TIME);
+  }
+}
+
+void FrontEnd::refill() {
+  if (exhausted_) return;
+  const std::span<const Fragment> batch = src_.next();
+  if (batch.empty()) {
+    // End of pass: every partition drains before its next pass (or resolve).
+    for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0});
+    auto& out = counts_.pass_outcomes[pass_];
+    for (unsigned o = 0; o < model::kOutcomeCount; ++o) {
+      counts_.bytes_read += out[o] * algo_.readBytes(pass_, model::InsertOutcome(o));
+      counts_.bytes_written += out[o] * algo_.writeBytes(pass_, model::InsertOutcome(o));
+    }
+    if (pass_ == 0) {
+      counts_.fragments_in = index_;
+      counts_.stored = out[size_t(model::InsertOutcome::Stored)];
+      counts_.merged = out[size_t(model::InsertOutcome::Merged)];
+      counts_.discarded = out[size_t(model::InsertOutcome::Discarded)];
+    }
+    if (progress_) progress_(double(pass_ + 1) / passes_, std::string(algo_.passName(pass_)));
+    if (++pass_ < passes_) {
+      src_.rewind();
+      ++source_reads_;
+      index_ = 0;
+      next_progress_ = uint64_t(1) << 20;
+    } else {
+      exhausted_ = true;
+    }
+    return;
+  }
+  auto& outcomes = counts_.pass_outcomes[pass_];
+  const bool first = pass_ == 0;
+  const uint32_t width = geo_.width;
+  uint32_t last_draw = ~0u;
+  DrawCounts* dc = nullptr;
+  bool last_opaque = false;
+  model::InsertContext ctx;
+  for (const Fragment& f : batch) {
+    const uint32_t seq = uint32_t(index_++);
+    if (f.draw != last_draw) {
+      last_draw = f.draw;
+      last_opaque = classes_.isOpaque(f.draw);
+      dc = first && !last_opaque ? &per_draw_[f.draw] : nullptr;
+    }
+    if (last_opaque) {
+      if (first) ++counts_.opaque;
+      continue;
+    }
+    const uint32_t pixel = uint32_t(f.y) * width + f.x;
+    const uint32_t tile = geo_.tileOf(f.x, f.y);
+    const float oz = opaque_.depth[pixel];
+    InRec r{pixel, tile, seq, 0, 0, 0};
+    if (hierarchical_ ? !(f.z < hiz_min_[tile] || f.z >= hiz_max_[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
+    if (f.z >= oz) {  // at or behind the opaque surface: culled
+      r.flags |= InRec::kCulled;
+      if (first) {
+        ++counts_.culled;
+        ++dc->fragments;
+        ++dc->culled;
+      }
+    } else {
+      ctx.opaque_z = oz;
+      const model::InsertOutcome o = algo_.insert(state_.data() + size_t(pixel) * words_, f, pass_, ctx);
+      r.outcome = uint8_t(o);
+      ++outcomes[size_t(o)];
+      if (first) {
+        ++dc->fragments;
+        ++dc->blended;
+        if (!tile_nodes_.empty() && o == model::InsertOutcome::Stored) ++tile_nodes_[tile];
+      }
+    }
+    queues_[geo_.partitionOf(tile)].push(r);
+  }
+  if (progress_ && index_ >= next_progress_) {
+    next_progress_ = index_ + (uint64_t(1) << 20);
+    const uint64_t total = std::max<uint64_t>(1, src_.header().fragment_count);
+    progress_((pass_ + std::min(1.0, double(index_) / double(total))) / passes_, std::string(algo_.passName(pass_)));
+  }
+}
+
+}  // namespace oit::rop

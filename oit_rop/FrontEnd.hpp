@@ -1,0 +1,117 @@
+// The ROP front end: reads the trace in batches, classifies and routes every
+// fragment to the partition that owns its screen tile, and runs the
+// functional model on the way ("functional decides what, timing decides
+// when"): the early-depth cull decision (z >= final opaque depth) and the
+// algorithm's insert() are made here, in global submission order, pass by
+// pass, on the full-screen per-pixel state. The InsertOutcome travels with the
+// fragment's record and decides its timing cost downstream. A partition pulls
+// a batch when its input runs dry; a partition with a long backlog holds the
+// others back (high watermark), so memory stays bounded.
+#pragma once
+
+#include <systemc>
+
+#include <array>
+#include <functional>
+#include <string>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "model/FunctionalRenderer.hpp"
+#include "model/OitAlgorithm.hpp"
+#include "oit_rop/PipelineQueues.hpp"
+#include "oit_rop/RopConfig.hpp"
+
+namespace oit::rop {
+
+// Screen tiles (tile_w x tile_h = one blending-array cache line) and their
+// owners: tile (tx, ty) belongs to partition (tx + ty) % partitions, a
+// checkerboard-like interleave that spreads neighbouring tiles.
+struct FrameGeometry {
+  uint32_t width = 0, height = 0, tile_w = 8, tile_h = 8, tiles_x = 0, tiles_y = 0, partitions = 1;
+  std::vector<uint32_t> tile_col;   // x -> tile column
+  std::vector<uint32_t> tile_row;   // y -> tile row * tiles_x
+  std::vector<uint8_t> owner;       // tile -> partition
+
+  FrameGeometry() = default;
+  FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p);
+  uint32_t tiles() const { return tiles_x * tiles_y; }
+  uint32_t tilePixels() const { return tile_w * tile_h; }
+  uint32_t tileOf(uint32_t x, uint32_t y) const { return tile_row[y] + tile_col[x]; }
+  uint32_t partitionOf(uint32_t tile) const { return owner[tile]; }
+};
+
+// One routed fragment (16 bytes; culled and inserted fragments alike).
+struct InRec {
+  enum Flags : uint8_t { kCulled = 1, kNeedsDepthRead = 2, kPassEnd = 4 };
+  uint32_t pixel;
+  uint32_t tile;
+  uint32_t seq;     // index in the trace (shader latency hash)
+  uint8_t flags;
+  uint8_t outcome;  // model::InsertOutcome
+  uint16_t pad;
+};
+
+struct DrawCounts {
+  uint64_t fragments = 0, culled = 0, blended = 0;  // blended = inserted (any outcome)
+};
+
+class FrontEnd {
+ public:
+  FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,
+           const model::OpaqueLayer& opaque, const FrameGeometry& geo, const RopConfig& cfg);
+
+  Fifo<InRec>& queue(unsigned partition) { return queues_[partition]; }
+  bool exhausted() const { return exhausted_; }
+  // False while some partition's backlog is above the high watermark.
+  bool canRefill() const;
+  // Routes the next source batch (or, at the end of a pass, a pass-end marker
+  // to every partition and a rewind).
+  void refill();
+  // A partition popped its queue below the low watermark.
+  void popped(unsigned partition);
+  sc_core::sc_event& drained() { return drained_; }
+  void addWaiter() { ++waiters_; }
+
+  // Called about every 2^20 fragments routed: fraction of all passes done.
+  void setProgress(std::function<void(double, const std::string&)> f) { progress_ = std::move(f); }
+  unsigned passes() const { return passes_; }
+  const std::vector<uint32_t>& state() const { return state_; }
+  const model::RenderCounts& counts() const { return counts_; }
+  uint64_t sourceReads() const { return source_reads_; }
+  // Per tile: min / max opaque depth (hierarchical Z), opaque pixels landed.
+  const std::vector<float>& hizMin() const { return hiz_min_; }
+  const std::vector<float>& hizMax() const { return hiz_max_; }
+  const std::vector<uint16_t>& opaqueLanded() const { return landed_; }
+  // Unbounded algorithms (A-buffer): nodes stored per tile.
+  const std::vector<uint32_t>& tileNodes() const { return tile_nodes_; }
+  const std::unordered_map<uint32_t, DrawCounts>& perDraw() const { return per_draw_; }
+  // Opaque fragments per partition (counted by the opaque-phase scan).
+  const std::vector<uint64_t>& opaquePerPartition() const { return opaque_per_part_; }
+
+ private:
+  FragmentSource& src_;
+  model::OitAlgorithm& algo_;
+  const model::DrawClassifier& classes_;
+  const model::OpaqueLayer& opaque_;
+  const FrameGeometry& geo_;
+  bool hierarchical_;
+  unsigned words_, passes_, pass_ = 0;
+  bool exhausted_ = false;
+  uint64_t index_ = 0, source_reads_ = 0;
+  std::vector<uint32_t> state_;
+  std::vector<Fifo<InRec>> queues_;
+  std::vector<float> hiz_min_, hiz_max_;
+  std::vector<uint16_t> landed_;
+  std::vector<uint32_t> tile_nodes_;
+  std::vector<uint64_t> opaque_per_part_;
+  std::unordered_map<uint32_t, DrawCounts> per_draw_;
+  model::RenderCounts counts_;
+  sc_core::sc_event drained_;
+  unsigned waiters_ = 0;
+  std::function<void(double, const std::string&)> progress_;
+  uint64_t next_progress_ = uint64_t(1) << 20;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,70 @@
+#include "oit_rop/OitRop.hpp"
+
+#include <fmt/format.h>
+
+namespace oit::rop {
+
+OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const std::string& vcd_path)
+    : sc_module(name),
+      cfg_(*setup.cfg),
+      clock_(setup.cfg->clock.core_mhz),
+      dram_("dram", setup.cfg->dram, setup.cfg->clock.core_mhz) {
+  const unsigned n = setup.geo->partitions;
+  for (unsigned i = 0; i < n; ++i) {
+    parts_.push_back(std::make_unique<RopPartition>(fmt::format("partition{}", i).c_str(), i, setup, dram_.memory()));
+    parts_.back()->dram.bind(dram_.target);  // multi-passthrough: one binding per partition
+    done_list_ |= parts_.back()->doneEvent();
+  }
+  tr_occupancy_.assign(n, 0);
+  if (!vcd_path.empty()) {
+    std::string base = vcd_path;
+    if (base.size() > 4 && base.compare(base.size() - 4, 4, ".vcd") == 0) base.resize(base.size() - 4);
+    vcd_ = sc_core::sc_create_vcd_trace_file(base.c_str());
+    vcd_->set_time_unit(1.0, sc_core::SC_NS);
+    sc_core::sc_trace(vcd_, tr_dram_bytes_, "dram_bytes_per_interval");
+    sc_core::sc_trace(vcd_, tr_waiters_, "lock_waiters");
+    for (unsigned i = 0; i < n; ++i)
+      sc_core::sc_trace(vcd_, tr_occupancy_[i], fmt::format("partition{}_occupancy", i));
+  }
+  SC_THREAD(sampler);
+}
+
+OitRop::~OitRop() {
+  if (vcd_) sc_core::sc_close_vcd_trace_file(vcd_);
+}
+
+bool OitRop::allDone() const {
+  for (const auto& p : parts_)
+    if (!p->done()) return false;
+  return true;
+}
+
+void OitRop::sampler() {
+  const Cycle interval = std::max<uint64_t>(1, cfg_.stats.interval_cycles);
+  uint64_t last_bytes = 0;
+  for (Cycle c = interval;; c += interval) {
+    const sc_core::sc_time t = clock_.time(c);
+    if (t > sc_core::sc_time_stamp()) wait(t - sc_core::sc_time_stamp(), done_list_);
+    if (allDone()) return;
+    if (sc_core::sc_time_stamp() < t) {  // woken by a partition finishing: keep sampling on the grid
+      c -= interval;
+      continue;
+    }
+    const MemoryStats& ms = dram_.memory().stats();
+    const uint64_t bytes = ms.readBytes() + ms.writeBytes();
+    TimeSample s;
+    s.cycle = c;
+    s.dram_bytes = bytes - last_bytes;
+    last_bytes = bytes;
+    for (unsigned i = 0; i < parts_.size(); ++i) {
+      tr_occupancy_[i] = parts_[i]->lock().occupancy();
+      s.occupancy += tr_occupancy_[i];
+      s.lock_waiters += parts_[i]->lock().waiting();
+    }
+    tr_dram_bytes_ = s.dram_bytes;
+    tr_waiters_ = s.lock_waiters;
+    samples_.push_back(s);
+  }
+}
+
+}  // namespace oit::rop

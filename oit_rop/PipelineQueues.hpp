@@ -1,0 +1,125 @@
+// Small allocation-free building blocks of the ROP stages: an in-order FIFO
+// ring, a timing wheel for variable latencies (bucketed ring, no heap: the
+// SystemC notes measured a priority queue at 24% of the run), and a
+// fixed-point rate limiter for "N per clock" throughputs.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "oit_rop/Types.hpp"
+
+namespace oit::rop {
+
+// FIFO ring with power-of-two capacity; grows (amortised) only when full, so a
+// warmed-up pipeline never allocates.
+template <class T>
+class Fifo {
+ public:
+  explicit Fifo(size_t initial = 16) { buf_.resize(std::bit_ceil(std::max<size_t>(initial, 2))); }
+  bool empty() const { return size_ == 0; }
+  size_t size() const { return size_; }
+  T& front() { return buf_[head_]; }
+  const T& front() const { return buf_[head_]; }
+  void push(const T& v) {
+    if (size_ == buf_.size()) grow();
+    buf_[(head_ + size_) & (buf_.size() - 1)] = v;
+    ++size_;
+  }
+  void pop() {
+    head_ = (head_ + 1) & (buf_.size() - 1);
+    --size_;
+  }
+  void clear() { head_ = size_ = 0; }
+
+ private:
+  void grow() {
+    std::vector<T> n(buf_.size() * 2);
+    for (size_t i = 0; i < size_; ++i) n[i] = buf_[(head_ + i) & (buf_.size() - 1)];
+    buf_.swap(n);
+    head_ = 0;
+  }
+  std::vector<T> buf_;
+  size_t head_ = 0, size_ = 0;
+};
+
+// Tokens due at a future cycle, at most `horizon` - 1 cycles ahead. Every cycle
+// the owner drains the bucket of `now`; the simulator never jumps past
+// nextDue(), so no bucket is skipped. Within a bucket, scheduling order.
+class TimingWheel {
+ public:
+  explicit TimingWheel(unsigned horizon) : buckets_(std::bit_ceil(std::max(horizon, 2u))) {}
+  unsigned horizon() const { return unsigned(buckets_.size()); }
+  void schedule(Cycle due, uint32_t token) {
+    buckets_[due & (buckets_.size() - 1)].push_back(token);
+    ++count_;
+  }
+  // Calls f(token) for every token due at `now`, in scheduling order.
+  template <class F>
+  void drain(Cycle now, F&& f) {
+    auto& b = buckets_[now & (buckets_.size() - 1)];
+    if (b.empty()) return;
+    for (uint32_t t : b) f(t);
+    count_ -= b.size();
+    b.clear();
+  }
+  // First cycle after `now` with a due token (kNever when empty).
+  Cycle nextDue(Cycle now) const {
+    if (count_ == 0) return kNever;
+    const size_t mask = buckets_.size() - 1;
+    for (Cycle c = now + 1; c <= now + buckets_.size(); ++c)
+      if (!buckets_[c & mask].empty()) return c;
+    return kNever;
+  }
+  size_t size() const { return count_; }
+
+ private:
+  std::vector<std::vector<uint32_t>> buckets_;
+  size_t count_ = 0;
+};
+
+// "rate per clock" as integer credits in 1/256 units, accumulated lazily by
+// elapsed cycles: the same answers whether or not idle cycles are skipped.
+class RateLimiter {
+ public:
+  static constexpr int64_t kOne = 256;
+  explicit RateLimiter(double per_clock = 1.0) {
+    if (!(per_clock > 0)) throw std::invalid_argument("rate per clock must be > 0");
+    rate_ = std::max<int64_t>(1, int64_t(per_clock * kOne + 0.5));
+    cap_ = std::max(rate_, kOne);
+    credit_ = cap_;
+  }
+  // Tokens that may pass at `now` (call once per cycle per stage, before take()).
+  unsigned available(Cycle now) {
+    if (now > last_) {
+      const Cycle dt = now - last_;
+      credit_ = dt >= Cycle(cap_) ? cap_ : std::min(cap_, credit_ + rate_ * int64_t(dt));
+      last_ = now;
+    }
+    return unsigned(credit_ / kOne);
+  }
+  void take() { credit_ -= kOne; }
+  // Earliest cycle > now at which one token is available (after available(now)).
+  Cycle nextAvailable(Cycle now) const {
+    if (credit_ >= kOne) return now + 1;
+    return now + Cycle((kOne - credit_ + rate_ - 1) / rate_);
+  }
+  double perClock() const { return double(rate_) / kOne; }
+
+ private:
+  int64_t rate_ = kOne, cap_ = kOne, credit_ = kOne;
+  Cycle last_ = 0;
+};
+
+// Anything that books DRAM transfers (the partition's TLM port, or a fixed
+// latency fake in unit tests). Returns the completion cycle.
+class MemoryPort {
+ public:
+  virtual ~MemoryPort() = default;
+  virtual Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) = 0;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,458 @@
+#include "oit_rop/RopPartition.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace oit::rop {
+
+namespace {
+constexpr unsigned kResolvePrefetch = 8;  // tiles whose lines are fetched ahead of the resolve
+constexpr Cycle kPostedWindow = 1024;     // posted DRAM writes may run this far ahead
+constexpr uint32_t kNodeBytes = 12;       // A-buffer node as published: rgba8 + z32 + next32
+uint8_t dummy_data[1];
+}  // namespace
+
+RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup,
+                           MemorySystem& memory)
+    : sc_module(name),
+      dram("dram"),
+      id_(id),
+      s_(setup),
+      cfg_(*setup.cfg),
+      geo_(*setup.geo),
+      front_(*setup.front),
+      clock_(cfg_.clock.core_mhz),
+      quantum_(std::max<Cycle>(1, cfg_.sim.quantum_cycles)),
+      shader_(cfg_.input),
+      early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this),
+      lock_(cfg_.lock, geo_.width),
+      cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear),
+      alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
+      tok_(cfg_.lock.capacity),
+      cache_q_(256),
+      tail_q_(256) {
+  cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
+  early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
+  payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
+  payload_.set_data_ptr(dummy_data);
+  node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
+  SC_THREAD(run);
+}
+
+Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
+  DramExtension* ext = nullptr;
+  payload_.get_extension(ext);
+  ext->now = now;
+  ext->surface = s;
+  payload_.set_command(write ? tlm::TLM_WRITE_COMMAND : tlm::TLM_READ_COMMAND);
+  payload_.set_address(addr);
+  payload_.set_data_length(bytes);
+  payload_.set_streaming_width(bytes);
+  payload_.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+  const sc_core::sc_time at = clock_.time(now), stamp = sc_core::sc_time_stamp();
+  sc_core::sc_time delay = at > stamp ? at - stamp : sc_core::SC_ZERO_TIME;
+  dram->b_transport(payload_, delay);
+  if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
+  if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  return ext->done;
+}
+
+void RopPartition::advance(Cycle next, bool count_skip) {
+  const Cycle span = next - now_;
+  for (size_t i = 0; i < kStageCount; ++i) res_.accounts.stage[i].add(status_[i], span);
+  if (count_skip && span > 1) res_.skipped_idle += span - 1;
+  now_ = next;
+  if (now_ >= next_sync_) {
+    // Synchronise on quantum boundaries (multiples of sim.quantum_cycles), so
+    // partitions interleave their DRAM requests the same way whether or not
+    // idle cycles are skipped.
+    const Cycle boundary = now_ / quantum_ * quantum_;
+    const sc_core::sc_time tb = clock_.time(boundary), stamp = sc_core::sc_time_stamp();
+    qk_.set(tb > stamp ? tb - stamp : sc_core::SC_ZERO_TIME);
+    qk_.sync();
+    next_sync_ = boundary + quantum_;
+  }
+}
+
+void RopPartition::setStatus(Stage st, StageStatus v) { status_[size_t(st)] = v; }
+
+void RopPartition::opaquePhase() {
+  for (uint32_t t = 0; t < geo_.tiles(); ++t)
+    if (geo_.partitionOf(t) == id_) owned_.push_back(t);
+  status_.fill(StageStatus::idle());
+  // Without fast clear every blending-array tile is written clear at frame start.
+  if (!cfg_.skip.fast_clear)
+    for (uint32_t t : owned_)
+      access(now_, s_.map.blend_arrays + uint64_t(t) * s_.map.line_bytes, s_.map.line_bytes, true,
+             Surface::BlendArrays);
+  const uint64_t n = front_.opaquePerPartition()[id_];
+  if (n == 0) return;
+  // The opaque pre-pass: its fragments enter at the input rate (depth test and
+  // colour in the ROP's Z/colour path); the depth and colour of every tile
+  // where an opaque fragment landed are written once, spread over the phase.
+  const Cycle start = now_;
+  const Cycle cycles = Cycle(std::ceil(double(n) / cfg_.input.fragments_per_clock));
+  std::vector<uint32_t> landed;
+  for (uint32_t t : owned_)
+    if (front_.opaqueLanded()[t] != 0) landed.push_back(t);
+  setStatus(Stage::ShaderInput, StageStatus::busy());
+  for (size_t i = 0; i < landed.size(); ++i) {
+    const Cycle at = start + (i + 1) * cycles / landed.size();
+    if (at > now_) advance(at, false);
+    const uint32_t t = landed[i];
+    access(now_, s_.map.depth + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, true, Surface::Depth);
+    access(now_, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, true, Surface::Colour);
+  }
+  if (start + cycles > now_) advance(start + cycles, false);
+  status_.fill(StageStatus::idle());
+}
+
+void RopPartition::release(uint32_t t) {
+  lock_.release(now_, t);
+}
+
+void RopPartition::nodeWrite() {
+  // Nodes are appended to the partition's pool region; consecutive appends
+  // coalesce into burst-sized DRAM writes.
+  node_pending_ += kNodeBytes;
+  res_.node_bytes_written += kNodeBytes;
+  const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
+  while (node_pending_ >= burst) {
+    access(now_, node_addr_, burst, true, Surface::BlendArrays);
+    node_addr_ += burst;
+    node_pending_ -= burst;
+  }
+}
+
+void RopPartition::refillInput() {
+  auto& q = front_.queue(id_);
+  while (q.empty() && front_.canRefill()) front_.refill();
+  starving_ = q.empty() && !front_.exhausted();
+}
+
+Cycle RopPartition::missRetry() {
+  // The miss queue frees when an outstanding fill completes.
+  Cycle c = kNever;
+  size_t w = 0;
+  for (Cycle m : misses_)
+    if (m > now_) {
+      misses_[w++] = m;
+      c = std::min(c, m);
+    }
+  misses_.resize(w);
+  return c == kNever ? now_ + 1 : c;
+}
+
+bool RopPartition::transparentStep() {
+  const Cycle now = now_;
+  bool moved = false;
+
+  // BlendAlu completions: release the lock now (end of blend) or after the
+  // rest of the shader (end of shader).
+  alu_.complete(now, [&](uint32_t t) {
+    moved = true;
+    const TokenInfo& k = tok_[t];
+    if (!s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
+      nodeWrite();
+    if (cfg_.lock.release == LockRelease::EndOfShader)
+      tail_q_.push({now + cfg_.lock.shader_tail, t});
+    else
+      release(t);
+  });
+  while (!tail_q_.empty() && tail_q_.front().first <= now) {
+    release(tail_q_.front().second);
+    tail_q_.pop();
+    moved = true;
+  }
+
+  // BlendArrayCache pipeline -> BlendAlu (in order).
+  const unsigned alu_slots = alu_.slots(now);
+  unsigned to_alu = 0;
+  bool alu_blocked = false;
+  while (!cache_q_.empty() && cache_q_.front().ready <= now) {
+    if (to_alu >= alu_slots) {
+      alu_blocked = true;
+      break;
+    }
+    const CacheEntry e = cache_q_.front();
+    cache_q_.pop();
+    const TokenInfo& k = tok_[e.token];
+    const bool drop = (k.flags & InRec::kCulled) != 0;  // late cull: the blend drops it
+    if (drop) ++res_.culled_late;
+    alu_.issue(now, e.token, drop ? 0u : k.rows, drop);
+    ++to_alu;
+  }
+
+  // PixelLock -> BlendArrayCache: admitted fragments access their tile's line.
+  unsigned accepted = 0;
+  bool refused = false;
+  while (lock_.hasReady() && accepted < cache_ports_) {
+    const uint32_t t = lock_.frontReady();
+    const TokenInfo& k = tok_[t];
+    const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    const Cycle r = cache_.acquire(now, k.tile, write);
+    if (r == kNever) {
+      refused = true;
+      break;
+    }
+    lock_.enterFront(now);
+    const bool miss = r > now + cfg_.cache.hit_latency;
+    if (miss) misses_.push_back(r);
+    cache_q_.push({t, r, miss});
+    ++accepted;
+  }
+
+  // EarlyDepth -> PixelLock (or out, when culled early).
+  const unsigned left = early_.leave(now, [&](uint32_t t) {
+    const TokenInfo& k = tok_[t];
+    if ((k.flags & InRec::kCulled) && early_cull_) {
+      ++res_.culled_early;
+      lock_.drop(now, t);
+    } else {
+      lock_.arrive(now, t);
+    }
+  });
+
+  // Shader -> EarlyDepth.
+  unsigned shaded = 0;
+  shader_.finished(now, [&](uint32_t t) {
+    ++shaded;
+    early_.push(now, t, tok_[t].tile, (tok_[t].flags & InRec::kNeedsDepthRead) != 0);
+  });
+
+  // Issue from the routed input into the shader (needs a scoreboard entry).
+  auto& q = front_.queue(id_);
+  const unsigned slots = shader_.slots(now);
+  unsigned issued = 0;
+  bool sb_full = false, draining = false;
+  starving_ = false;
+  if (q.empty()) refillInput();  // eagerly, so the input's state never depends on skipped cycles
+  while (issued < slots) {
+    if (q.empty()) {
+      refillInput();
+      if (q.empty()) break;
+    }
+    const InRec& r = q.front();
+    if (r.flags & InRec::kPassEnd) {
+      if (lock_.occupancy() != 0) {
+        draining = true;  // pass p+1 starts after pass p drained
+        break;
+      }
+      q.pop();
+      res_.pass_end.push_back(now);
+      moved = true;
+      if (++pass_ == front_.passes()) return false;
+      continue;
+    }
+    if (lock_.full()) {
+      sb_full = true;
+      break;
+    }
+    uint32_t addr = r.pixel;
+    if (cfg_.lock.granularity == LockGranularity::Tile)
+      addr = r.tile;
+    else if (cfg_.lock.granularity == LockGranularity::Quad)
+      addr = lock_.address(r.pixel % geo_.width, r.pixel / geo_.width, geo_.tile_w, geo_.tile_h);
+    const uint32_t t = lock_.allocate(addr);
+    const bool culled = (r.flags & InRec::kCulled) != 0;
+    const auto outcome = model::InsertOutcome(r.outcome);
+    const uint8_t rows = culled ? 0 : uint8_t(BlendAlu::rowsFor(outcome, s_.array_rows, cfg_.skip.lazy_merge));
+    if (!culled && outcome == model::InsertOutcome::Stored && cfg_.skip.lazy_merge && s_.array_rows > 1)
+      ++res_.merges_skipped;
+    tok_[t] = TokenInfo{r.pixel, r.tile, r.flags, r.outcome, rows};
+    shader_.issue(now, t, r.seq, pass_);
+    q.pop();
+    front_.popped(id_);
+    ++res_.fragments;
+    ++issued;
+  }
+  moved = moved || to_alu || accepted || left || shaded || issued;
+  // Input waiting without a free entry (also when no issue slot this cycle).
+  if (!issued && !q.empty() && !(q.front().flags & InRec::kPassEnd) && lock_.full()) sb_full = true;
+
+  // Status of every stage in this cycle (holds until the next evaluated cycle).
+  const bool in_shader = shader_.inShader() != 0;
+  const bool in_early = early_.size() != 0;
+  if (issued) setStatus(Stage::ShaderInput, StageStatus::busy());
+  else if (sb_full) setStatus(Stage::ShaderInput, StageStatus::stall(Stall::ScoreboardFull));
+  else if (starving_) setStatus(Stage::ShaderInput, StageStatus::stall(Stall::InputStarved));
+  else if (in_shader) setStatus(Stage::ShaderInput, StageStatus::busy());
+  else setStatus(Stage::ShaderInput, StageStatus::idle());
+
+  if (early_.headWaitsForDepth(now) && !left) setStatus(Stage::EarlyDepth, StageStatus::stall(Stall::CacheMissWait));
+  else if (left || in_early) setStatus(Stage::EarlyDepth, StageStatus::busy());
+  else if (in_shader) setStatus(Stage::EarlyDepth, StageStatus::stall(Stall::InputStarved));
+  else setStatus(Stage::EarlyDepth, StageStatus::idle());
+
+  const bool upstream_of_lock = in_shader || in_early;
+  if (accepted) setStatus(Stage::PixelLock, StageStatus::busy());
+  else if (refused) setStatus(Stage::PixelLock, StageStatus::stall(Stall::CacheMissWait));
+  else if (lock_.waiting()) setStatus(Stage::PixelLock, StageStatus::stall(Stall::LockWait));
+  else if (upstream_of_lock) setStatus(Stage::PixelLock, StageStatus::stall(Stall::InputStarved));
+  else setStatus(Stage::PixelLock, StageStatus::idle());
+
+  const bool head_waits = !cache_q_.empty() && cache_q_.front().ready > now;
+  if (to_alu || accepted || (head_waits && !cache_q_.front().miss)) setStatus(Stage::Cache, StageStatus::busy());
+  else if (refused || head_waits) setStatus(Stage::Cache, StageStatus::stall(Stall::CacheMissWait));
+  else if (alu_blocked) setStatus(Stage::Cache, StageStatus::stall(Stall::AluBusy));
+  else if (lock_.occupancy()) setStatus(Stage::Cache, StageStatus::stall(Stall::InputStarved));
+  else setStatus(Stage::Cache, StageStatus::idle());
+
+  if (to_alu || alu_.inFlight()) setStatus(Stage::BlendAlu, StageStatus::busy());
+  else if (lock_.occupancy()) setStatus(Stage::BlendAlu, StageStatus::stall(Stall::InputStarved));
+  else setStatus(Stage::BlendAlu, StageStatus::idle());
+  setStatus(Stage::Resolve, StageStatus::idle());
+
+  // Next cycle at which any stage can move.
+  Cycle next = now + 1;
+  if (!moved) {
+    const Cycle ev = nextEvent(refused, sb_full, draining);
+    if (ev == kNever) {
+      if (!starving_) throw std::logic_error(fmt::format("partition {}: nothing can move at cycle {}", id_, now));
+      waitForFrontEnd();
+      return true;
+    }
+    if (cfg_.skip.idle_cycles) next = std::max(ev, now + 1);
+  }
+  advance(next, true);
+  return true;
+}
+
+Cycle RopPartition::nextEvent(bool refused, bool sb_full, bool draining) {
+  const Cycle now = now_;
+  Cycle next = std::min({shader_.nextFinish(now), early_.nextEvent(now), alu_.nextCompletion()});
+  if (!tail_q_.empty()) next = std::min(next, tail_q_.front().first);
+  if (!cache_q_.empty())
+    next = std::min(next, cache_q_.front().ready > now ? cache_q_.front().ready : alu_.nextSlot(now));
+  if (lock_.hasReady()) next = std::min(next, refused ? missRetry() : now + 1);
+  if (!front_.queue(id_).empty() && !sb_full && !draining) next = std::min(next, shader_.nextSlot(now));
+  if (draining && lock_.occupancy() == 0) next = now + 1;
+  return next;
+}
+
+void RopPartition::waitForFrontEnd() {
+  // Another partition's backlog is at the high watermark: wait until it drains.
+  advance(now_ + 1, true);
+  front_.addWaiter();
+  wait(front_.drained());
+  const Cycle t = clock_.cycle(sc_core::sc_time_stamp());
+  if (t > now_) advance(t, false);
+}
+
+void RopPartition::resolvePhase() {
+  status_.fill(StageStatus::idle());
+  if (node_pending_) {  // flush the node write-combiner
+    access(now_, node_addr_, uint32_t(node_pending_), true, Surface::BlendArrays);
+    node_addr_ += node_pending_;
+    node_pending_ = 0;
+  }
+  // Fast clear: tiles no fragment wrote keep their clear state; their colour
+  // is already the opaque/clear colour, so they are neither read nor resolved.
+  std::vector<uint32_t> tiles;
+  for (uint32_t t : owned_) {
+    if (!cfg_.skip.fast_clear || cache_.touched(t))
+      tiles.push_back(t);
+    else
+      ++res_.tiles_skipped_fast_clear;
+  }
+  const double px_per_clock = std::max(1e-6, double(cfg_.alu.blends_per_clock) * s_.format_rate);
+  Fifo<ResolveEntry> pf(16);
+  size_t next_issue = 0;
+  bool computing = false;
+  uint32_t computing_tile = 0;
+  Cycle compute_done = 0;
+  for (;;) {
+    const Cycle now = now_;
+    bool moved = false;
+    if (computing && now >= compute_done) {
+      access(now, s_.map.colour + uint64_t(computing_tile) * s_.map.tile4_bytes, s_.map.tile4_bytes, true,
+             Surface::Resolve);
+      computing = false;
+      moved = true;
+      ++res_.tiles_resolved;
+    }
+    unsigned acquired = 0;
+    bool refused = false;
+    while (next_issue < tiles.size() && pf.size() < kResolvePrefetch && acquired < cache_ports_) {
+      const Cycle r = cache_.acquire(now, tiles[next_issue], false);
+      if (r == kNever) {
+        refused = true;
+        break;
+      }
+      const bool miss = r > now + cfg_.cache.hit_latency;
+      if (miss) misses_.push_back(r);
+      pf.push({tiles[next_issue], r, miss});
+      ++next_issue;
+      ++acquired;
+      moved = true;
+    }
+    bool window_blocked = false;
+    if (!computing && !pf.empty() && pf.front().ready <= now) {
+      if (last_write_done_ > now + kPostedWindow) {
+        window_blocked = true;
+      } else {
+        const uint32_t t = pf.front().tile;
+        pf.pop();
+        uint64_t work = geo_.tilePixels();
+        if (front_.opaqueLanded()[t] != 0)
+          access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour);
+        if (!s_.bounded) {
+          // List traversal: every node of the tile's lists is read once.
+          const uint64_t nodes = front_.tileNodes()[t];
+          if (nodes) {
+            const uint64_t bytes = nodes * kNodeBytes;
+            access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
+                   uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays);
+            res_.node_bytes_read += bytes;
+          }
+          work = std::max<uint64_t>(work, nodes);
+        }
+        computing = true;
+        computing_tile = t;
+        compute_done = now + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
+        moved = true;
+      }
+    }
+    if (!computing && pf.empty() && next_issue == tiles.size()) break;
+    if (computing) setStatus(Stage::Resolve, StageStatus::busy());
+    else if (window_blocked) setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+    else setStatus(Stage::Resolve, StageStatus::stall(Stall::CacheMissWait));
+    Cycle next = now + 1;
+    if (!moved && cfg_.skip.idle_cycles) {
+      next = kNever;
+      if (computing) next = std::min(next, compute_done);
+      if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
+      if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
+      if (refused) next = std::min(next, missRetry());
+      if (!computing && !pf.empty() && pf.front().ready <= now && !window_blocked) next = now + 1;
+      next = std::max(next == kNever ? now + 1 : next, now + 1);
+    }
+    advance(next, true);
+  }
+  // The frame ends when the last posted write reached DRAM.
+  setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+  const Cycle end = std::max(now_, last_write_done_);
+  if (end > now_) {
+    if (cfg_.skip.idle_cycles)
+      advance(end, true);
+    else
+      while (now_ < end) advance(now_ + 1, true);
+  }
+  setStatus(Stage::Resolve, StageStatus::idle());
+}
+
+void RopPartition::run() {
+  opaquePhase();
+  res_.opaque_end = now_;
+  while (transparentStep()) {
+  }
+  resolvePhase();
+  res_.end = now_;
+  done_ = true;
+  done_event_.notify(sc_core::SC_ZERO_TIME);
+}
+
+}  // namespace oit::rop

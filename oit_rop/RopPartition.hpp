@@ -1,0 +1,142 @@
+// RopPartition: one ROP partition (sc_module). Its stages are plain C++
+// objects (ShaderInput -> EarlyDepth -> PixelLock -> BlendArrayCache ->
+// BlendAlu, then Resolve) advanced cycle by cycle by ONE SC_THREAD with a
+// tlm_quantumkeeper; when no stage can move, the thread jumps to the next
+// cycle at which one can (skip.idle_cycles), and the skipped span keeps every
+// stage's status (busy / stall cause / idle) for the accounting.
+//
+// Frame: opaque phase (depth + colour of the opaque pre-pass, charged as
+// traffic and input time), then every algorithm pass (pass p+1 after this
+// partition drained pass p), then resolve of the partition's tiles.
+#pragma once
+
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/tlm_quantumkeeper.h>
+
+#include <memory>
+#include <vector>
+
+#include "oit_rop/BlendAlu.hpp"
+#include "oit_rop/BlendArrayCache.hpp"
+#include "oit_rop/DramSystem.hpp"
+#include "oit_rop/EarlyDepth.hpp"
+#include "oit_rop/FrontEnd.hpp"
+#include "oit_rop/PixelLock.hpp"
+#include "oit_rop/ShaderInput.hpp"
+#include "oit_rop/TimingStats.hpp"
+
+namespace oit::rop {
+
+// DRAM address map of the frame's surfaces (tile-linear).
+struct AddressMap {
+  uint64_t blend_arrays = 0, depth = 0, colour = 0, node_pool = 0;
+  uint32_t line_bytes = 0;   // one tile of blending arrays (A-buffer: heads)
+  uint32_t tile4_bytes = 0;  // one tile of a 4 B/pixel surface
+};
+
+struct PartitionSetup {
+  const RopConfig* cfg = nullptr;
+  const FrameGeometry* geo = nullptr;
+  FrontEnd* front = nullptr;
+  AddressMap map;
+  unsigned array_rows = 0;   // layout rows (for rowsFor)
+  double format_rate = 1.0;  // BlendAlu throughput factor
+  bool bounded = true;       // false: A-buffer node pool traffic
+};
+
+struct PartitionResult {
+  Cycle end = 0;                 // last cycle incl. draining posted writes
+  Cycle opaque_end = 0;
+  std::vector<Cycle> pass_end;   // cycle each pass drained
+  StageAccounts accounts;
+  uint64_t skipped_idle = 0;
+  uint64_t fragments = 0, culled_early = 0, culled_late = 0, blended = 0;
+  uint64_t tiles_resolved = 0, tiles_skipped_fast_clear = 0;
+  uint64_t node_bytes_written = 0, node_bytes_read = 0;
+  uint64_t merges_skipped = 0;   // Stored inserts that did not pay the merge (lazy)
+};
+
+class RopPartition : public sc_core::sc_module, public MemoryPort {
+ public:
+  tlm_utils::simple_initiator_socket<RopPartition> dram;
+
+  SC_HAS_PROCESS(RopPartition);
+  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemorySystem& memory);
+
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
+
+  bool done() const { return done_; }
+  sc_core::sc_event& doneEvent() { return done_event_; }
+  const PartitionResult& result() const { return res_; }
+  const PixelLock& lock() const { return lock_; }
+  const BlendArrayCache& cache() const { return cache_; }
+  const EarlyDepth& earlyDepth() const { return early_; }
+  const BlendAlu& alu() const { return alu_; }
+
+ private:
+  struct TokenInfo {
+    uint32_t pixel, tile;
+    uint8_t flags, outcome, rows;
+  };
+  struct CacheEntry {
+    uint32_t token;
+    Cycle ready;
+    bool miss;
+  };
+  struct ResolveEntry {
+    uint32_t tile;
+    Cycle ready;
+    bool miss;
+  };
+
+  void run();
+  void advance(Cycle next, bool count_skip);  // accounting of [now, next) + quantum keeper
+  void setStatus(Stage st, StageStatus v);
+  void opaquePhase();
+  bool transparentStep();  // one cycle; false when every pass drained
+  Cycle nextEvent(bool refused, bool sb_full, bool draining);
+  void waitForFrontEnd();
+  void resolvePhase();
+  void release(uint32_t token);
+  void nodeWrite();
+  void refillInput();
+  Cycle missRetry();
+
+  unsigned id_;
+  PartitionSetup s_;
+  const RopConfig& cfg_;
+  const FrameGeometry& geo_;
+  FrontEnd& front_;
+  CoreClock clock_;
+  tlm_utils::tlm_quantumkeeper qk_;
+  Cycle quantum_;
+  tlm::tlm_generic_payload payload_;
+  DramExtension ext_;
+
+  ShaderInput shader_;
+  EarlyDepth early_;
+  PixelLock lock_;
+  BlendArrayCache cache_;
+  BlendAlu alu_;
+  std::vector<TokenInfo> tok_;
+  Fifo<CacheEntry> cache_q_;
+  Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
+  std::vector<Cycle> misses_;                // outstanding fill completions
+  unsigned cache_ports_;
+  bool early_cull_;
+  unsigned pass_ = 0;
+  Cycle now_ = 0, next_sync_ = 0;
+  std::vector<uint32_t> owned_;  // tiles of this partition
+  std::array<StageStatus, kStageCount> status_{};
+  bool starving_ = false;
+  // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
+  uint64_t node_pending_ = 0, node_addr_ = 0;
+  Cycle last_write_done_ = 0;
+  bool done_ = false;
+  sc_core::sc_event done_event_;
+  PartitionResult res_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,277 @@
+#include "oit_rop/TimingRun.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <tlm>
+
+#include "oit_rop/BlendAlu.hpp"
+#include "oit_rop/FrontEnd.hpp"
+#include "oit_rop/OitRop.hpp"
+
+namespace oit::rop {
+
+namespace {
+
+using nlohmann::json;
+
+uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
+
+void validate(const RopConfig& c) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument("timing config: " + what); };
+  if (!(c.clock.core_mhz > 0)) bad("clock.core_mhz must be > 0");
+  if (!(c.input.fragments_per_clock > 0)) bad("input.fragments_per_clock must be > 0");
+  if (c.lock.capacity == 0) bad("lock.capacity must be > 0");
+  if (c.alu.blends_per_clock == 0) bad("alu.blends_per_clock must be > 0");
+  if (!(c.alu.fp16_rate > 0) || !(c.alu.fp32_rate > 0)) bad("alu.fp16_rate and alu.fp32_rate must be > 0");
+  if (c.stats.interval_cycles == 0) bad("stats.interval_cycles must be > 0");
+}
+
+json stageJson(const StageCycles& s) {
+  json stalls = json::object();
+  for (unsigned i = 0; i < kStallCount; ++i) stalls[stallKey(Stall(i))] = s.stalls[i];
+  return {{"busy", s.busy}, {"idle", s.idle}, {"stalls", stalls}, {"stalled", s.stalled()}};
+}
+
+json bySurface(const std::array<uint64_t, kSurfaceCount>& v) {
+  json j = json::object();
+  uint64_t total = 0;
+  for (unsigned i = 0; i < kSurfaceCount; ++i) {
+    j[surfaceKey(Surface(i))] = v[i];
+    total += v[i];
+  }
+  j["total"] = total;
+  return j;
+}
+
+}  // namespace
+
+TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const RopConfig& cfg,
+                       const TimingOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (sc_core::sc_get_status() != sc_core::SC_ELABORATION || sc_core::sc_find_object("oit_rop"))
+    throw std::logic_error("runTiming: SystemC elaborates once per process; run one timing simulation per process");
+  validate(cfg);
+
+  const TraceHeader& h = src.header();
+  const model::DrawClassifier classes(h);
+  algo.beginFrame(h);
+  if (opt.progress) opt.progress(0.0, "opaque");
+  const model::OpaqueLayer opaque = model::buildOpaqueLayer(src, classes);
+
+  const FrameGeometry geo(h.width, h.height, cfg.partitions);
+  FrontEnd front(src, algo, classes, opaque, geo, cfg);
+  if (opt.progress) front.setProgress(opt.progress);
+
+  // Address map: tile-linear surfaces, each 1 MiB aligned.
+  AddressMap map;
+  map.line_bytes = geo.tilePixels() * algo.bytesPerPixel();
+  map.tile4_bytes = geo.tilePixels() * 4;
+  map.blend_arrays = 0;
+  map.depth = alignUp(uint64_t(geo.tiles()) * map.line_bytes, 1u << 20);
+  map.colour = map.depth + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
+  map.node_pool = map.colour + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
+
+  PartitionSetup setup;
+  setup.cfg = &cfg;
+  setup.geo = &geo;
+  setup.front = &front;
+  setup.map = map;
+  setup.array_rows = algo.layout().rows;
+  setup.format_rate = BlendAlu::formatRate(cfg.alu, algo.layout());
+  setup.bounded = algo.bounded();
+
+  const CoreClock clock(cfg.clock.core_mhz);
+  tlm::tlm_global_quantum::instance().set(clock.time(std::max<uint64_t>(1, cfg.sim.quantum_cycles)));
+  auto top = std::make_unique<OitRop>("oit_rop", setup, opt.vcd_path);
+  sc_core::sc_start();
+  if (!top->allDone()) throw std::logic_error("runTiming: the simulation stopped before every partition finished");
+
+  // ---- Frame time and per-stage accounting ----
+  const unsigned n = top->partitionCount();
+  Cycle cycles = 0;
+  for (unsigned i = 0; i < n; ++i) cycles = std::max(cycles, top->partition(i).result().end);
+  StageAccounts sum;
+  json parts = json::array();
+  uint64_t skipped = 0, culled_early = 0, culled_late = 0, tiles_skipped = 0, tiles_resolved = 0, merges_skipped = 0;
+  uint64_t node_w = 0, node_r = 0;
+  LockStats lock{};
+  CacheStats cache{};
+  EarlyDepthStats depth{};
+  AluStats alu{};
+  std::vector<uint64_t> part_frags;
+  for (unsigned i = 0; i < n; ++i) {
+    const RopPartition& p = top->partition(i);
+    PartitionResult r = p.result();
+    r.accounts.padTo(cycles);
+    r.accounts.checkBalanced(cycles);
+    json stages = json::object();
+    for (unsigned s = 0; s < kStageCount; ++s) {
+      sum.stage[s] += r.accounts.stage[s];
+      stages[stageKey(Stage(s))] = stageJson(r.accounts.stage[s]);
+    }
+    parts.push_back({{"end_cycle", r.end}, {"opaque_end_cycle", r.opaque_end}, {"pass_end_cycles", r.pass_end},
+                     {"fragments", r.fragments}, {"stages", stages},
+                     {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lock().stats().peak_occupancy}});
+    part_frags.push_back(r.fragments);
+    skipped += r.skipped_idle;
+    culled_early += r.culled_early;
+    culled_late += r.culled_late;
+    tiles_skipped += r.tiles_skipped_fast_clear;
+    tiles_resolved += r.tiles_resolved;
+    merges_skipped += r.merges_skipped;
+    node_w += r.node_bytes_written;
+    node_r += r.node_bytes_read;
+    const LockStats& l = p.lock().stats();
+    lock.arrivals += l.arrivals;
+    lock.conflicts += l.conflicts;
+    lock.wait_cycles += l.wait_cycles;
+    lock.longest_wait = std::max(lock.longest_wait, l.longest_wait);
+    lock.out_of_order_entries += l.out_of_order_entries;
+    lock.entries += l.entries;
+    lock.peak_occupancy = std::max(lock.peak_occupancy, l.peak_occupancy);
+    const CacheStats& c = p.cache().stats();
+    cache.accesses += c.accesses;
+    cache.hits += c.hits;
+    cache.misses += c.misses;
+    cache.clear_fills += c.clear_fills;
+    cache.evictions += c.evictions;
+    cache.writebacks += c.writebacks;
+    cache.miss_queue_full += c.miss_queue_full;
+    cache.peak_misses_in_flight = std::max(cache.peak_misses_in_flight, c.peak_misses_in_flight);
+    const EarlyDepthStats& d = p.earlyDepth().stats();
+    depth.tested += d.tested;
+    depth.depth_reads += d.depth_reads;
+    depth.depth_buffer_hits += d.depth_buffer_hits;
+    depth.hiz_decided += d.hiz_decided;
+    alu.blends += p.alu().stats().blends;
+    alu.rows += p.alu().stats().rows;
+    alu.dropped += p.alu().stats().dropped;
+  }
+  sum.checkBalanced(cycles * n);
+
+  // ---- The image: functional resolve of the per-pixel state ----
+  TimingResult res;
+  const size_t pixels = size_t(h.width) * h.height;
+  const unsigned words = algo.stateWords();
+  res.image = model::Image(h.width, h.height);
+  const auto& state = front.state();
+  for (size_t p = 0; p < pixels; ++p) {
+    const model::Rgb bg = opaque.landed(p) ? opaque.colour[p] : opt.clear_colour;
+    res.image.pixels[p] = algo.resolve(state.data() + p * words, bg);
+  }
+  res.counts = front.counts();
+  res.counts.source_passes = unsigned(front.sourceReads() + (classes.anyOpaque() ? 1 : 0));
+
+  // ---- Statistics ----
+  const model::RenderCounts& rc = res.counts;
+  const double frame_us = double(cycles) / cfg.clock.core_mhz;
+  json timing = {{"cycles", cycles},
+                 {"frame_time_us", frame_us},
+                 {"clock_mhz", cfg.clock.core_mhz},
+                 {"partitions", n},
+                 {"partition_cycles", cycles * n},
+                 {"skipped_idle_cycles", skipped},
+                 {"fragments_per_cycle", cycles ? double(rc.fragments_in) * algo.passes() / double(cycles) : 0.0}};
+  json stages = json::object();
+  for (unsigned s = 0; s < kStageCount; ++s) stages[stageKey(Stage(s))] = stageJson(sum.stage[s]);
+  timing["stages"] = stages;
+  timing["per_partition"] = parts;
+
+  json pass_outcomes = json::array();
+  for (const auto& po : rc.pass_outcomes) pass_outcomes.push_back({{"stored", po[0]}, {"merged", po[1]}, {"discarded", po[2]}});
+  json fragments = {{"in", rc.fragments_in},
+                    {"opaque", rc.opaque},
+                    {"culled_by_depth", rc.culled},
+                    {"blended", rc.stored},
+                    {"merged", rc.merged},
+                    {"discarded", rc.discarded},
+                    {"outcomes_sum_to_in", rc.balanced()},
+                    {"per_partition", part_frags},
+                    {"pass_outcomes", pass_outcomes},
+                    {"rmw_bytes_read", rc.bytes_read},
+                    {"rmw_bytes_written", rc.bytes_written}};
+
+  const MemoryStats& ms = top->dram().memory().stats();
+  const double bytes_total = double(ms.readBytes() + ms.writeBytes());
+  double peak_gbps = 0;
+  const double interval_s = double(cfg.stats.interval_cycles) / (cfg.clock.core_mhz * 1e6);
+  json series = json::array();
+  for (const TimeSample& s : top->samples()) {
+    peak_gbps = std::max(peak_gbps, double(s.dram_bytes) / interval_s / 1e9);
+    series.push_back({{"cycle", s.cycle}, {"dram_bytes", s.dram_bytes}, {"scoreboard_occupancy", s.occupancy},
+                      {"lock_waiters", s.lock_waiters}});
+  }
+  const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
+  if (top->samples().empty()) peak_gbps = mean_gbps;  // shorter than one interval
+
+  uint32_t touched_tiles = 0, landed_tiles = 0;
+  for (uint32_t t = 0; t < geo.tiles(); ++t) {
+    if (top->partition(geo.partitionOf(t)).cache().touched(t)) ++touched_tiles;
+    if (front.opaqueLanded()[t]) ++landed_tiles;
+  }
+  const uint64_t wh = uint64_t(h.width) * h.height;
+  const uint64_t nodes = algo.bounded() ? 0 : rc.stored;
+  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + 12 * nodes},
+                    {"depth", 4 * wh},
+                    {"colour", 4 * wh},
+                    {"resolve", 0}};
+  json touched = {{"blend_arrays", uint64_t(touched_tiles) * map.line_bytes + (algo.bounded() ? 0 : 12 * nodes)},
+                  {"depth", uint64_t(landed_tiles) * map.tile4_bytes},
+                  {"colour", uint64_t(landed_tiles) * map.tile4_bytes},
+                  {"resolve", tiles_resolved * map.tile4_bytes}};
+  json memory = {{"dram_read_bytes", bySurface(ms.read_bytes)},
+                 {"dram_write_bytes", bySurface(ms.write_bytes)},
+                 {"requests", ms.requests},
+                 {"row_hits", ms.row_hits},
+                 {"row_misses", ms.row_misses},
+                 {"peak_gbps", peak_gbps},
+                 {"mean_gbps", mean_gbps},
+                 {"channel_peak_gbps", top->dram().memory().peakBytesPerCycle() * cfg.clock.core_mhz * 1e6 / 1e9},
+                 {"node_pool_bytes_written", node_w},
+                 {"node_pool_bytes_read", node_r},
+                 {"footprint", {{"allocated", allocated}, {"touched", touched}}}};
+  json lockj = {{"conflicts", lock.conflicts},
+                {"wait_cycles", lock.wait_cycles},
+                {"longest_wait", lock.longest_wait},
+                {"peak_occupancy", lock.peak_occupancy},
+                {"out_of_order_entries", lock.out_of_order_entries},
+                {"entries", lock.entries},
+                {"capacity", cfg.lock.capacity}};
+  json cachej = {{"hit_rate", cache.hitRate()},          {"accesses", cache.accesses},
+                 {"hits", cache.hits},                   {"misses", cache.misses},
+                 {"clear_fills", cache.clear_fills},     {"evictions", cache.evictions},
+                 {"writebacks", cache.writebacks},       {"miss_queue_full", cache.miss_queue_full},
+                 {"peak_misses_in_flight", cache.peak_misses_in_flight}, {"line_bytes", map.line_bytes}};
+  json skips = {{"early_depth_culled", culled_early},
+                {"late_culled", culled_late},
+                {"tiles_skipped_fast_clear", tiles_skipped},
+                {"tiles_resolved", tiles_resolved},
+                {"merges_skipped", merges_skipped},
+                {"idle_cycles_skipped", skipped}};
+  json depthj = {{"tested", depth.tested},
+                 {"depth_tile_reads", depth.depth_reads},
+                 {"depth_buffer_hits", depth.depth_buffer_hits},
+                 {"hiz_decided", depth.hiz_decided}};
+  json alu_j = {{"blends", alu.blends}, {"rows", alu.rows}, {"dropped", alu.dropped}};
+  json per_draw = json::object();
+  std::vector<uint32_t> ids;
+  for (const auto& [id, _] : front.perDraw()) ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  for (uint32_t id : ids) {
+    const DrawCounts& d = front.perDraw().at(id);
+    per_draw[std::to_string(id)] = {{"fragments", d.fragments}, {"culled", d.culled}, {"blended", d.blended}};
+  }
+  res.stats = {{"timing", timing}, {"fragments", fragments}, {"memory", memory}, {"lock", lockj},
+               {"cache", cachej},  {"skips", skips},         {"depth", depthj},   {"alu", alu_j},
+               {"timeseries", {{"interval_cycles", cfg.stats.interval_cycles}, {"samples", series}}},
+               {"per_draw", per_draw}};
+  top.reset();
+  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (opt.progress) opt.progress(1.0, "done");
+  return res;
+}
+
+}  // namespace oit::rop

@@ -1,0 +1,39 @@
+// The timing mode of oitsim: replays a fragment trace through the SystemC ROP
+// model (OitRop) and returns the image (bit-identical to FunctionalRenderer's
+// by construction) with the timing, traffic and lock statistics. The schema of
+// `stats` is in oit_rop/DESIGN.md.
+//
+// SystemC elaborates once per process: runTiming() may be called once per
+// process (it throws std::logic_error on a second call).
+#pragma once
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "model/FunctionalRenderer.hpp"
+#include "model/Image.hpp"
+#include "model/OitAlgorithm.hpp"
+#include "oit_rop/RopConfig.hpp"
+#include "traces/TraceIO.hpp"
+
+namespace oit::rop {
+
+struct TimingOptions {
+  model::Rgb clear_colour{0.0f, 0.0f, 0.0f};
+  // fraction in [0, 1] of the trace passes done, and what is running.
+  std::function<void(double fraction, const std::string& what)> progress;
+  std::string vcd_path;  // empty: no VCD
+};
+
+struct TimingResult {
+  model::Image image;
+  model::RenderCounts counts;
+  nlohmann::json stats;       // sections timing, fragments, memory, lock, cache, skips, depth, timeseries, per_draw
+  double wall_seconds = 0.0;  // not in stats: stats are deterministic
+};
+
+TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const RopConfig& cfg,
+                       const TimingOptions& opt);
+
+}  // namespace oit::rop

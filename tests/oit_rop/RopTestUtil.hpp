@@ -1,0 +1,139 @@
+// Helpers of the oit_rop timing tests. SystemC elaborates once per process, so
+// every timing run of a test happens in a forked child that sends back the
+// stats, counts and the raw image bytes.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "model/AlgoTestUtil.hpp"
+#include "model/MemorySource.hpp"
+#include "oit_rop/TimingRun.hpp"
+
+namespace oit::rop::testutil {
+
+struct ChildRun {
+  bool ok = false;
+  std::string error;
+  nlohmann::json stats;
+  model::Image image;
+  model::RenderCounts counts;
+};
+
+inline ChildRun runInChild(const std::function<TimingResult()>& f) {
+  int fd[2];
+  if (pipe(fd) != 0) return {false, "pipe failed"};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fd[0]);
+    std::string out;
+    try {
+      TimingResult r = f();
+      nlohmann::json c = {{"in", r.counts.fragments_in}, {"opaque", r.counts.opaque}, {"culled", r.counts.culled},
+                          {"stored", r.counts.stored}, {"merged", r.counts.merged},
+                          {"discarded", r.counts.discarded}, {"pass_outcomes", r.counts.pass_outcomes},
+                          {"bytes_read", r.counts.bytes_read}, {"bytes_written", r.counts.bytes_written}};
+      nlohmann::json head = {{"ok", true}, {"stats", r.stats}, {"counts", c}, {"w", r.image.width}, {"h", r.image.height}};
+      const std::string hs = head.dump();
+      const uint64_t n = hs.size();
+      out.append(reinterpret_cast<const char*>(&n), 8);
+      out += hs;
+      out.append(reinterpret_cast<const char*>(r.image.pixels.data()), r.image.pixels.size() * sizeof(model::Rgb));
+    } catch (const std::exception& e) {
+      const std::string hs = nlohmann::json{{"ok", false}, {"error", e.what()}}.dump();
+      const uint64_t n = hs.size();
+      out.assign(reinterpret_cast<const char*>(&n), 8);
+      out += hs;
+    }
+    size_t off = 0;
+    while (off < out.size()) {
+      const ssize_t w = write(fd[1], out.data() + off, out.size() - off);
+      if (w <= 0) break;
+      off += size_t(w);
+    }
+    close(fd[1]);
+    _exit(0);
+  }
+  close(fd[1]);
+  std::string in;
+  char buf[1 << 16];
+  for (ssize_t r; (r = read(fd[0], buf, sizeof buf)) > 0;) in.append(buf, size_t(r));
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ChildRun cr;
+  if (in.size() < 8) {
+    cr.error = "child died (status " + std::to_string(status) + ")";
+    return cr;
+  }
+  uint64_t n = 0;
+  std::memcpy(&n, in.data(), 8);
+  const auto head = nlohmann::json::parse(in.substr(8, n));
+  if (!head.at("ok").get<bool>()) {
+    cr.error = head.at("error").get<std::string>();
+    return cr;
+  }
+  cr.ok = true;
+  cr.stats = head.at("stats");
+  const auto& c = head.at("counts");
+  cr.counts.fragments_in = c.at("in");
+  cr.counts.opaque = c.at("opaque");
+  cr.counts.culled = c.at("culled");
+  cr.counts.stored = c.at("stored");
+  cr.counts.merged = c.at("merged");
+  cr.counts.discarded = c.at("discarded");
+  cr.counts.pass_outcomes = c.at("pass_outcomes").get<std::vector<std::array<uint64_t, model::kOutcomeCount>>>();
+  cr.counts.bytes_read = c.at("bytes_read");
+  cr.counts.bytes_written = c.at("bytes_written");
+  cr.image = model::Image(head.at("w"), head.at("h"));
+  std::memcpy(cr.image.pixels.data(), in.data() + 8 + n, cr.image.pixels.size() * sizeof(model::Rgb));
+  return cr;
+}
+
+// A small scene: an opaque backdrop over the left 2/3 of the frame at random
+// depths, transparent fragments of two draws (random depths, some behind the
+// backdrop, some with a = 0), submitted interleaved.
+inline std::vector<Fragment> smallScene(uint32_t w, uint32_t h, unsigned max_depth, uint32_t seed) {
+  using namespace model::testutil;
+  std::vector<Fragment> fs;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w * 2 / 3; ++x) fs.push_back(frag(uint16_t(x), uint16_t(y), 0.5f + 0.5f * u(rng), u(rng), u(rng), u(rng), 1.0f, kOpaqueDraw));
+  auto tr = randomScene(w, h, max_depth, seed + 1);
+  for (size_t i = 0; i < tr.size(); ++i) {
+    tr[i].draw = (i % 3 == 0) ? kTranspDraw2 : kTranspDraw;
+    if (i % 17 == 0) tr[i].a = 0.0f;
+  }
+  // Opaque first in half of the cases, interleaved otherwise: submission order
+  // must not matter for the opaque pre-pass.
+  std::vector<Fragment> out;
+  size_t oi = 0, ti = 0;
+  while (oi < fs.size() || ti < tr.size()) {
+    if (oi < fs.size() && (ti >= tr.size() || rng() % 3 == 0)) out.push_back(fs[oi++]);
+    else if (ti < tr.size()) out.push_back(tr[ti++]);
+  }
+  return out;
+}
+
+inline RopConfig smallConfig() {
+  RopConfig c;
+  c.stats.interval_cycles = 500;
+  return c;
+}
+
+inline TimingResult timed(const std::string& algo, const model::AlgorithmParams& p, const std::vector<Fragment>& fs,
+                          uint32_t w, uint32_t h, const RopConfig& cfg, TimingOptions opt = {}) {
+  model::MemorySource src(model::testutil::header(w, h), fs, 333);
+  auto a = model::makeAlgorithm(algo, p);
+  return runTiming(src, *a, cfg, opt);
+}
+
+}  // namespace oit::rop::testutil

@@ -1,0 +1,63 @@
+// EarlyDepth: HiZ-decided fragments need no depth read; the others wait for
+// the depth tile (fixed-latency fake DRAM), in order; tile buffer reuse.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "oit_rop/EarlyDepth.hpp"
+
+using namespace oit::rop;
+
+namespace {
+struct FakeDram : MemoryPort {
+  Cycle latency = 100;
+  std::vector<std::pair<uint64_t, uint32_t>> reads;
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override {
+    EXPECT_FALSE(write);
+    EXPECT_EQ(s, Surface::Depth);
+    reads.push_back({addr, bytes});
+    return now + latency;
+  }
+};
+
+std::vector<std::pair<Cycle, uint32_t>> runUntilEmpty(EarlyDepth& e, Cycle from) {
+  std::vector<std::pair<Cycle, uint32_t>> out;
+  for (Cycle now = from; e.size() > 0 && now < from + 10000; ++now) e.leave(now, [&](uint32_t t) { out.push_back({now, t}); });
+  return out;
+}
+}  // namespace
+
+TEST(EarlyDepth, HiZDecidedFragmentsPassAfterTheStageLatency) {
+  FakeDram mem;
+  EarlyDepthConfig c;
+  c.latency = 4;
+  EarlyDepth e(c, 2.0, 256, 1 << 20, mem);
+  e.push(10, 1, 0, false);
+  e.push(10, 2, 1, false);
+  const auto out = runUntilEmpty(e, 11);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0], (std::pair<Cycle, uint32_t>{14, 1}));
+  EXPECT_EQ(out[1], (std::pair<Cycle, uint32_t>{14, 2}));
+  EXPECT_TRUE(mem.reads.empty());
+  EXPECT_EQ(e.stats().hiz_decided, 2u);
+}
+
+TEST(EarlyDepth, DepthReadBlocksInOrderAndTheTileBufferIsReused) {
+  FakeDram mem;
+  EarlyDepthConfig c;
+  c.latency = 4;
+  EarlyDepth e(c, 1.0, 256, 1 << 20, mem);
+  e.push(0, 1, 5, true);   // reads tile 5: ready at 100
+  e.push(1, 2, 9, false);  // decided by HiZ, but behind fragment 1
+  e.push(2, 3, 5, true);   // same tile: no second read
+  EXPECT_TRUE(e.headWaitsForDepth(50));
+  EXPECT_EQ(e.nextEvent(0), 4u);  // the head turns from latency to waiting at 4
+  const auto out = runUntilEmpty(e, 1);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0], (std::pair<Cycle, uint32_t>{100, 1}));
+  EXPECT_EQ(out[1], (std::pair<Cycle, uint32_t>{101, 2}));  // 1 per clock
+  EXPECT_EQ(out[2], (std::pair<Cycle, uint32_t>{102, 3}));
+  ASSERT_EQ(mem.reads.size(), 1u);
+  EXPECT_EQ(mem.reads[0], (std::pair<uint64_t, uint32_t>{(1 << 20) + 5 * 256, 256}));
+  EXPECT_EQ(e.stats().depth_buffer_hits, 1u);
+}
