@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -18,16 +19,28 @@ class TraceError : public std::runtime_error {
  public:
   TraceError(std::string file, uint64_t byte_offset, std::optional<uint64_t> record,
              std::string field, const std::string& what);
+  // An error about the file as a whole (cannot open, create, write, rename):
+  // no position, byteOffset() is 0 and field() is empty.
+  TraceError(std::string file, const std::string& what);
+  // A CSV error: also names the 1-based line; field is the column name (or the
+  // metadata keyword for a comment-header line).
+  static TraceError inCsv(std::string file, uint64_t line, uint64_t byte_offset,
+                          std::optional<uint64_t> record, std::string field,
+                          const std::string& what);
   const std::string& file() const { return file_; }
   uint64_t byteOffset() const { return byte_offset_; }
   std::optional<uint64_t> record() const { return record_; }
   const std::string& field() const { return field_; }
+  std::optional<uint64_t> line() const { return line_; }
 
  private:
+  TraceError(std::string file, std::optional<uint64_t> line, std::optional<uint64_t> byte_offset,
+             std::optional<uint64_t> record, std::string field, const std::string& what);
   std::string file_;
   uint64_t byte_offset_;
   std::optional<uint64_t> record_;
   std::string field_;
+  std::optional<uint64_t> line_;
 };
 
 struct OpenOptions {

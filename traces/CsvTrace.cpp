@@ -1,0 +1,508 @@
+// CSV form of trace format v1 (FORMAT.md, "CSV form"): a two-pass streaming
+// reader (pass 1 builds the draw table and count, pass 2 hands out batches)
+// and a buffered writer. Floats are written in shortest round-trip form.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <string_view>
+#include <unordered_map>
+
+#include "traces/AtomicFile.hpp"
+#include "traces/TraceBackends.hpp"
+#include "traces/TraceFormat.hpp"
+#include "traces/TraceRules.hpp"
+
+namespace oit::detail {
+
+namespace fv = format_v1;
+
+namespace {
+
+constexpr std::string_view kColumnLine = "draw,prim,x,y,z,r,g,b,a,opaque";
+constexpr size_t kColumns = 10;
+constexpr const char* kColumnNames[kColumns] = {"draw", "prim", "x", "y", "z",
+                                                "r",    "g",    "b", "a", "opaque"};
+enum Col : size_t { kDraw, kPrim, kX, kY, kZ, kR, kG, kB, kA, kOpaque };
+
+bool isBlank(char c) { return c == ' ' || c == '\t'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && isBlank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && isBlank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+bool allBlank(std::string_view s) { return trim(s).empty(); }
+
+// Quotes a draw name: backslash and double quote are escaped (names hold no
+// control bytes, so nothing else needs it).
+std::string quoteName(const std::string& name) {
+  std::string q = "\"";
+  for (char c : name) {
+    if (c == '"' || c == '\\') q += '\\';
+    q += c;
+  }
+  return q + '"';
+}
+
+// Reads lines and keeps track of where each starts.
+class LineReader {
+ public:
+  explicit LineReader(const std::string& path) : in_(path, std::ios::binary) {}
+  bool isOpen() const { return in_.is_open(); }
+  // False at end of file. Strips a trailing CR (files edited on Windows) and a
+  // leading UTF-8 byte order mark.
+  bool next() {
+    if (!std::getline(in_, line_)) return false;
+    offset_ = next_offset_;
+    next_offset_ += line_.size() + (in_.eof() ? 0 : 1);
+    ++number_;
+    if (!line_.empty() && line_.back() == '\r') line_.pop_back();
+    if (offset_ == 0 && line_.starts_with("\xEF\xBB\xBF")) {  // UTF-8 BOM from some editors
+      line_.erase(0, 3);
+      offset_ = 3;
+    }
+    return true;
+  }
+  void seek(uint64_t offset, uint64_t line_number) {
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(offset));
+    next_offset_ = offset;
+    number_ = line_number;
+  }
+  bool bad() const { return in_.bad(); }
+  std::string_view line() const { return line_; }
+  uint64_t number() const { return number_; }  // 1-based number of the current line
+  uint64_t offset() const { return offset_; }  // byte offset of the current line
+  uint64_t nextOffset() const { return next_offset_; }
+
+ private:
+  std::ifstream in_;
+  std::string line_;
+  uint64_t number_ = 0;
+  uint64_t offset_ = 0;
+  uint64_t next_offset_ = 0;
+};
+
+struct DrawState {
+  size_t index;          // into TraceHeader::draws
+  bool declared;         // listed by a "# draw" comment line
+  uint64_t where_line;   // the comment line, or the draw's first row
+};
+
+class CsvReader final : public FragmentSource {
+ public:
+  CsvReader(const std::string& path, const OpenOptions& opts);
+  const TraceHeader& header() const override { return header_; }
+  const std::string& path() const override { return path_; }
+  uint64_t position() const override { return pos_; }
+  void rewind() override {
+    in_.seek(data_offset_, data_line_ - 1);
+    pos_ = 0;
+  }
+  std::span<const Fragment> next() override;
+
+ private:
+  [[noreturn]] void fail(uint64_t byte_offset, std::optional<uint64_t> record,
+                         std::string field, const std::string& msg) const {
+    throw TraceError::inCsv(path_, in_.number(), byte_offset, record, std::move(field), msg);
+  }
+  void parseMetadata(std::string_view line);
+  // Parses the current line as record `record`; in pass 1 unknown draws join the table.
+  Fragment parseRow(uint64_t record, bool first_pass);
+  // Next data line (skips blank and comment lines); false at end of file.
+  bool nextDataLine();
+
+  std::string path_;
+  TraceHeader header_;
+  LineReader in_;
+  std::optional<uint32_t> meta_width_, meta_height_;
+  bool meta_version_ = false, meta_camera_ = false, meta_encoding_ = false;
+  std::unordered_map<uint32_t, DrawState> draws_;
+  RecordRules rules_;
+  uint64_t data_offset_ = 0;  // first byte after the column line
+  uint64_t data_line_ = 0;    // line number of the first line after the column line
+  uint64_t pos_ = 0;
+  size_t batch_;
+  std::vector<Fragment> buf_;
+};
+
+CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
+    : path_(path), in_(path), batch_(opts.batch_records) {
+  if (!in_.isOpen()) throw TraceError(path_, fmt::format("cannot open: {}", std::strerror(errno)));
+  // Comment header, up to the column line.
+  bool found_columns = false;
+  while (in_.next()) {
+    const std::string_view line = in_.line();
+    if (allBlank(line)) continue;
+    if (line.front() == '#') {
+      parseMetadata(line);
+      continue;
+    }
+    if (line != kColumnLine)
+      fail(in_.offset(), std::nullopt, "header",
+           fmt::format("expected the column line '{}', found '{}'", kColumnLine,
+                       line.substr(0, 80)));
+    found_columns = true;
+    break;
+  }
+  if (in_.bad()) throw TraceError(path_, "read error");
+  if (!found_columns)
+    fail(in_.nextOffset(), std::nullopt, "header",
+         fmt::format("no column line '{}' (empty file or only comments)", kColumnLine));
+  data_offset_ = in_.nextOffset();
+  data_line_ = in_.number() + 1;
+
+  // Frame size: the comment header wins, else the caller's options.
+  header_.width = meta_width_.value_or(opts.width);
+  header_.height = meta_height_.value_or(opts.height);
+  for (const auto& [name, v] : {std::pair{"width", header_.width}, {"height", header_.height}}) {
+    if (v == 0)
+      fail(in_.offset(), std::nullopt, name,
+           "no frame size: the CSV has no '# width' / '# height' comment lines; pass --width and "
+           "--height");
+    if (v > fv::kMaxFrameSize)
+      fail(in_.offset(), std::nullopt, name,
+           fmt::format("{} {} exceeds {} (x and y are u16)", name, v, fv::kMaxFrameSize));
+  }
+  rules_.width = header_.width;
+  rules_.height = header_.height;
+
+  // Pass 1: validate every row, count them, complete the draw table.
+  uint64_t count = 0;
+  while (nextDataLine()) parseRow(count++, true);
+  if (in_.bad()) throw TraceError(path_, "read error");
+  header_.fragment_count = count;
+  rules_.draws = DrawSet(header_.draws);
+  buf_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
+  rewind();
+}
+
+bool CsvReader::nextDataLine() {
+  while (in_.next()) {
+    const std::string_view line = in_.line();
+    if (allBlank(line)) continue;
+    if (line.front() == '#') {
+      // Metadata after the column line would be silently ignored: refuse it.
+      parseMetadata(line);
+      continue;
+    }
+    return true;
+  }
+  return false;
+}
+
+// Tokens of a comment line, with their byte offsets in the file.
+class Tokens {
+ public:
+  Tokens(std::string_view line, uint64_t line_offset) : s_(line), base_(line_offset) {}
+  // Next whitespace-separated token; empty at end of line.
+  std::string_view next() {
+    while (i_ < s_.size() && isBlank(s_[i_])) ++i_;
+    start_ = i_;
+    while (i_ < s_.size() && !isBlank(s_[i_])) ++i_;
+    return s_.substr(start_, i_ - start_);
+  }
+  uint64_t offset() const { return base_ + start_; }  // of the last token
+  // Skips blanks; the offset and remaining text.
+  std::string_view rest() {
+    while (i_ < s_.size() && isBlank(s_[i_])) ++i_;
+    start_ = i_;
+    return s_.substr(i_);
+  }
+
+ private:
+  std::string_view s_;
+  uint64_t base_;
+  size_t i_ = 0, start_ = 0;
+};
+
+template <class T>
+bool parseNumber(std::string_view s, T& out) {
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+void CsvReader::parseMetadata(std::string_view line) {
+  Tokens t(line.substr(1), in_.offset() + 1);
+  const std::string key(t.next());
+  auto err = [&](const std::string& msg) { fail(t.offset(), std::nullopt, key, msg); };
+  auto expectEnd = [&] {
+    if (const std::string_view extra = t.next(); !extra.empty())
+      err(fmt::format("unexpected '{}' at the end of the '# {}' line", extra, key));
+  };
+  const bool after_columns = data_offset_ != 0;
+  const bool known = key == "oitsim-trace" || key == "width" || key == "height" ||
+                     key == "camera" || key == "encoding" || key == "draw";
+  if (!known) return;  // a free comment
+  if (after_columns)
+    err(fmt::format("'# {}' metadata must come before the column line '{}'", key, kColumnLine));
+
+  if (key == "oitsim-trace") {
+    const std::string_view v = t.next();
+    if (meta_version_) err("duplicate '# oitsim-trace' line");
+    if (v != "v1")
+      err(fmt::format("unsupported version '{}': this build reads v1", v));
+    meta_version_ = true;
+    expectEnd();
+  } else if (key == "width" || key == "height") {
+    std::optional<uint32_t>& slot = key == "width" ? meta_width_ : meta_height_;
+    if (slot) err(fmt::format("duplicate '# {}' line", key));
+    const std::string_view v = t.next();
+    uint32_t n = 0;
+    if (!parseNumber(v, n) || n == 0 || n > fv::kMaxFrameSize)
+      err(fmt::format("{} '{}': expected an integer in 1..{}", key, v, fv::kMaxFrameSize));
+    slot = n;
+    expectEnd();
+  } else if (key == "camera") {
+    if (meta_camera_) err("duplicate '# camera' line");
+    float planes[2];
+    for (float& p : planes) {
+      const std::string_view v = t.next();
+      if (!parseNumber(v, p)) err(fmt::format("camera plane '{}' is not a number", v));
+    }
+    if (auto p = cameraProblem(planes[0], planes[1])) err(*p);
+    header_.camera = CameraPlanes{planes[0], planes[1]};
+    meta_camera_ = true;
+    expectEnd();
+  } else if (key == "encoding") {
+    if (meta_encoding_) err("duplicate '# encoding' line");
+    const std::string_view v = t.next();
+    if (v == "fp32")
+      header_.encoding = ColourEncoding::Fp32;
+    else if (v == "unorm8")
+      header_.encoding = ColourEncoding::Unorm8;
+    else
+      err(fmt::format("bad encoding '{}': expected fp32 or unorm8", v));
+    meta_encoding_ = true;
+    expectEnd();
+  } else {  // draw ID CLASS "NAME"
+    DrawInfo d;
+    const std::string_view id = t.next();
+    if (!parseNumber(id, d.id)) err(fmt::format("draw id '{}' is not a u32", id));
+    const uint64_t id_offset = t.offset();
+    const std::string_view cls = t.next();
+    if (cls == "opaque")
+      d.cls = DrawClass::Opaque;
+    else if (cls == "transparent")
+      d.cls = DrawClass::Transparent;
+    else
+      err(fmt::format("bad draw class '{}': expected opaque or transparent", cls));
+    const std::string_view rest = t.rest();
+    size_t i = 1;
+    bool closed = false;
+    if (rest.empty() || rest[0] != '"') err("expected the draw name in double quotes");
+    for (; i < rest.size(); ++i) {
+      if (rest[i] == '"') {
+        closed = true;
+        ++i;
+        break;
+      }
+      if (rest[i] == '\\') {
+        if (i + 1 >= rest.size() || (rest[i + 1] != '"' && rest[i + 1] != '\\'))
+          err("bad escape in the draw name: only \\\" and \\\\ are allowed");
+        ++i;
+      }
+      d.name += rest[i];
+    }
+    if (!closed) err("the draw name has no closing double quote");
+    if (!allBlank(rest.substr(i))) err("unexpected text after the draw name");
+    if (auto p = drawNameProblem(d.name)) err(*p);
+    if (auto it = draws_.find(d.id); it != draws_.end())
+      fail(id_offset, std::nullopt, key,
+           fmt::format("duplicate draw id {} (also declared at line {})", d.id, it->second.where_line));
+    draws_.emplace(d.id, DrawState{header_.draws.size(), true, in_.number()});
+    header_.draws.push_back(std::move(d));
+  }
+}
+
+Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
+  const std::string_view line = in_.line();
+  const uint64_t base = in_.offset();
+  auto err = [&](size_t col, size_t at, const std::string& msg) {
+    fail(base + at, record, kColumnNames[col], msg);
+  };
+  // Split into exactly 10 fields, remembering where each starts.
+  std::string_view field[kColumns];
+  size_t start[kColumns];
+  size_t p = 0;
+  for (size_t c = 0; c < kColumns; ++c) {
+    const size_t comma = line.find(',', p);
+    const bool last = c + 1 == kColumns;
+    if (!last && comma == std::string_view::npos)
+      err(c + 1, line.size(), fmt::format("row has {} columns, expected {} ({})", c + 1, kColumns,
+                                          kColumnLine));
+    if (last && comma != std::string_view::npos)
+      err(c, comma, fmt::format("row has more than {} columns, expected {} ({})", kColumns,
+                                kColumns, kColumnLine));
+    const size_t end = last ? line.size() : comma;
+    std::string_view raw = line.substr(p, end - p);
+    size_t lead = 0;
+    while (lead < raw.size() && isBlank(raw[lead])) ++lead;
+    start[c] = p + lead;
+    field[c] = trim(raw);
+    if (field[c].empty()) err(c, start[c], "empty field");
+    p = end + 1;
+  }
+  auto u64 = [&](size_t c, uint64_t max) {
+    uint64_t v = 0;
+    if (!parseNumber(field[c], v))
+      err(c, start[c], fmt::format("'{}' is not an unsigned decimal integer", field[c]));
+    if (v > max) err(c, start[c], fmt::format("{} is out of range (at most {})", v, max));
+    return v;
+  };
+  auto unit = [&](size_t c, fv::Field f) {
+    float v = 0;
+    const std::string_view s = field[c];
+    const auto [q, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (q != s.data() + s.size() || (ec != std::errc() && ec != std::errc::result_out_of_range))
+      err(c, start[c], fmt::format("'{}' is not a decimal number", s));
+    if (ec == std::errc::result_out_of_range)
+      err(c, start[c], fmt::format("'{}' is not representable as fp32", s));
+    if (auto msg = unitMessage(f, v)) err(c, start[c], *msg);
+    return v;
+  };
+
+  Fragment f{};
+  f.draw = static_cast<uint32_t>(u64(kDraw, UINT32_MAX));
+  f.prim = static_cast<uint32_t>(u64(kPrim, UINT32_MAX));
+  const uint64_t x = u64(kX, UINT64_MAX), y = u64(kY, UINT64_MAX);
+  if (x >= rules_.width) err(kX, start[kX], coordMessage(fv::Field::X, x, rules_.width));
+  if (y >= rules_.height) err(kY, start[kY], coordMessage(fv::Field::Y, y, rules_.height));
+  f.x = static_cast<uint16_t>(x);
+  f.y = static_cast<uint16_t>(y);
+  f.z = unit(kZ, fv::Field::Z);
+  f.r = unit(kR, fv::Field::R);
+  f.g = unit(kG, fv::Field::G);
+  f.b = unit(kB, fv::Field::B);
+  f.a = unit(kA, fv::Field::A);
+  if (field[kOpaque] != "0" && field[kOpaque] != "1")
+    err(kOpaque, start[kOpaque], fmt::format("'{}': expected 0 or 1", field[kOpaque]));
+  const DrawClass cls = field[kOpaque] == "1" ? DrawClass::Opaque : DrawClass::Transparent;
+
+  auto it = draws_.find(f.draw);
+  if (it == draws_.end()) {
+    if (!first_pass)
+      throw TraceError::inCsv(path_, in_.number(), base, record, "draw",
+                              "the file changed while it was being read (new draw id)");
+    // Undeclared draw: named after its id, classed by its opaque column.
+    draws_.emplace(f.draw, DrawState{header_.draws.size(), false, in_.number()});
+    header_.draws.push_back(DrawInfo{f.draw, cls, fmt::format("draw{}", f.draw)});
+  } else if (header_.draws[it->second.index].cls != cls) {
+    const DrawState& s = it->second;
+    err(kOpaque, start[kOpaque],
+        fmt::format("opaque {} but draw {} is {} ({} line {})", field[kOpaque], f.draw,
+                    toString(header_.draws[s.index].cls),
+                    s.declared ? "declared by the comment header at" : "its first row is at",
+                    s.where_line));
+  }
+  if (header_.encoding == ColourEncoding::Unorm8) {
+    // What the binary form of this trace would hold.
+    f.r = quantizeUnorm8(f.r);
+    f.g = quantizeUnorm8(f.g);
+    f.b = quantizeUnorm8(f.b);
+    f.a = quantizeUnorm8(f.a);
+  }
+  return f;
+}
+
+std::span<const Fragment> CsvReader::next() {
+  size_t n = 0;
+  while (n < buf_.size() && pos_ + n < header_.fragment_count) {
+    if (!nextDataLine())
+      throw TraceError::inCsv(path_, in_.number(), in_.nextOffset(), pos_ + n, "",
+                              fmt::format("the file changed while it was being read: it now ends "
+                                          "before record {} of {}",
+                                          pos_ + n, header_.fragment_count));
+    buf_[n] = parseRow(pos_ + n, false);
+    ++n;
+  }
+  pos_ += n;
+  return {buf_.data(), n};
+}
+
+class CsvWriter final : public FragmentSink {
+ public:
+  CsvWriter(const std::string& path, const TraceHeader& header);
+  void write(const Fragment& f) override { write(std::span<const Fragment>(&f, 1)); }
+  void write(std::span<const Fragment> fs) override;
+  void commit() override { file_.commit(); }
+  uint64_t written() const override { return written_; }
+
+ private:
+  TraceHeader header_;
+  RecordRules rules_;
+  std::unordered_map<uint32_t, DrawClass> classes_;
+  AtomicFile file_;
+  uint64_t first_record_line_ = 0;
+  uint64_t written_ = 0;
+  fmt::memory_buffer row_;
+};
+
+const TraceHeader& checkedHeader(const std::string& path, const TraceHeader& h) {
+  checkHeaderForWrite(path, h);
+  return h;
+}
+
+CsvWriter::CsvWriter(const std::string& path, const TraceHeader& header)
+    : header_(checkedHeader(path, header)), file_(path) {
+  rules_.width = header_.width;
+  rules_.height = header_.height;
+  rules_.draws = DrawSet(header_.draws);
+  for (const DrawInfo& d : header_.draws) classes_[d.id] = d.cls;
+  fmt::memory_buffer m;
+  auto out = std::back_inserter(m);
+  fmt::format_to(out, "# oitsim-trace v1\n# width {}\n# height {}\n", header_.width, header_.height);
+  if (header_.camera)
+    fmt::format_to(out, "# camera {} {}\n", header_.camera->near_plane, header_.camera->far_plane);
+  fmt::format_to(out, "# encoding {}\n", toString(header_.encoding));
+  for (const DrawInfo& d : header_.draws)
+    fmt::format_to(out, "# draw {} {} {}\n", d.id, toString(d.cls), quoteName(d.name));
+  fmt::format_to(out, "{}\n", kColumnLine);
+  first_record_line_ = static_cast<uint64_t>(std::count(m.begin(), m.end(), '\n')) + 1;
+  file_.append(m.data(), m.size());
+}
+
+void CsvWriter::write(std::span<const Fragment> fs) {
+  if (file_.committed()) throw std::logic_error("FragmentSink::write after commit()");
+  const size_t bad = firstInvalid(fs, rules_);
+  const bool unorm8 = header_.encoding == ColourEncoding::Unorm8;
+  for (const Fragment& f0 : fs.first(bad)) {
+    Fragment f = f0;
+    if (unorm8) {
+      f.r = quantizeUnorm8(f.r);
+      f.g = quantizeUnorm8(f.g);
+      f.b = quantizeUnorm8(f.b);
+      f.a = quantizeUnorm8(f.a);
+    }
+    const int opaque = classes_.find(f.draw)->second == DrawClass::Opaque ? 1 : 0;
+    row_.clear();
+    fmt::format_to(std::back_inserter(row_), "{},{},{},{},{},{},{},{},{},{}\n", f.draw, f.prim, f.x,
+                   f.y, f.z, f.r, f.g, f.b, f.a, opaque);
+    file_.append(row_.data(), row_.size());
+    ++written_;
+  }
+  if (bad < fs.size()) {
+    const Violation v = *checkRecord(fs[bad], rules_);
+    throw TraceError::inCsv(file_.path(), first_record_line_ + written_, file_.size(), written_,
+                            fv::fieldName(v.field), v.message);
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<FragmentSource> openCsvTrace(const std::string& path, const OpenOptions& opts) {
+  return std::make_unique<CsvReader>(path, opts);
+}
+
+std::unique_ptr<FragmentSink> createCsvWriter(const std::string& path, const TraceHeader& header) {
+  return std::make_unique<CsvWriter>(path, header);
+}
+
+}  // namespace oit::detail
