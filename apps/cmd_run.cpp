@@ -1,5 +1,7 @@
 // oitsim run: replay a trace through an OIT algorithm and write the image, the
-// A-buffer reference, the enhanced difference and report.json.
+// A-buffer reference, the enhanced difference and report.json. The timing mode
+// (default) replays it through the SystemC ROP and adds cycles, stalls, DRAM
+// traffic and footprint; its image is the functional one by construction.
 //
 // Nothing is written until the whole run has succeeded: a bad trace (which the
 // reader reports with file, byte offset, record and field) leaves no report.
@@ -13,6 +15,8 @@
 #include "apps/Progress.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
+#include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
 #include "traces/TraceIO.hpp"
 
@@ -24,7 +28,9 @@ using model::AlgorithmParams;
 using model::RenderResult;
 
 struct RunArgs {
-  std::string trace, out, algo = "mlab", mode = "functional", format = "fp32";
+  std::string trace, out, algo = "mlab", mode = "timing", format = "fp32";
+  std::string preset = "igpu", config_file, vcd;
+  std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
   AlgorithmParams params;
   std::vector<float> background{0.0f, 0.0f, 0.0f};
@@ -60,7 +66,52 @@ nlohmann::json metricsJson(const model::ImageMetrics& m) {
           {"mean_abs", m.mean_abs}, {"max_abs", m.max_abs}, {"pixels_over_1_255", m.pixels_over_1_255}};
 }
 
-void runFunctional(RunArgs& a) {
+uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
+  if (!j.contains(a) || !j[a].contains(b)) return 0;
+  return j[a][b].get<uint64_t>();
+}
+
+// Cycles, frame time, stalls by cause, DRAM bytes and footprint side by side.
+void printTimingSummary(const nlohmann::json& j) {
+  const auto& t = j["timing"];
+  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), {} idle cycles skipped\n",
+             t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
+             t["partitions"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+  fmt::print("stalls      {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "stage", "busy", "lock wait",
+             "sb full", "miss wait", "dram bw", "alu busy", "starved");
+  for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {
+    const auto& st = it.value();
+    const auto& c = st["stalls"];
+    fmt::print("            {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", it.key(),
+               st["busy"].get<uint64_t>(), c["lock_wait"].get<uint64_t>(), c["scoreboard_full"].get<uint64_t>(),
+               c["cache_miss_wait"].get<uint64_t>(), c["dram_bandwidth"].get<uint64_t>(),
+               c["alu_busy"].get<uint64_t>(), c["input_starved"].get<uint64_t>());
+  }
+  const auto& m = j["memory"];
+  fmt::print("dram        read {} (arrays {}, depth {}, colour {}, resolve {}), written {}, peak {:.1f} GB/s, mean {:.1f} GB/s\n",
+             humanBytes(double(num(m, "dram_read_bytes", "total"))),
+             humanBytes(double(num(m, "dram_read_bytes", "blend_arrays"))),
+             humanBytes(double(num(m, "dram_read_bytes", "depth"))), humanBytes(double(num(m, "dram_read_bytes", "colour"))),
+             humanBytes(double(num(m, "dram_read_bytes", "resolve"))),
+             humanBytes(double(num(m, "dram_write_bytes", "total"))), m["peak_gbps"].get<double>(),
+             m["mean_gbps"].get<double>());
+  const auto& fa = m["footprint"]["allocated"];
+  const auto& ft = m["footprint"]["touched"];
+  auto total = [](const nlohmann::json& o) {
+    uint64_t sum = 0;
+    for (const auto& v : o) sum += v.get<uint64_t>();
+    return sum;
+  };
+  fmt::print("footprint   allocated {} (blend arrays {}), touched {}\n", humanBytes(double(total(fa))),
+             humanBytes(double(fa.value("blend_arrays", uint64_t(0)))), humanBytes(double(total(ft))));
+  const auto& l = j["lock"];
+  const auto& ca = j["cache"];
+  fmt::print("lock/cache  {} conflicts, {} wait cycles, longest {}, peak occupancy {}; cache hit rate {:.1f}%\n",
+             l["conflicts"].get<uint64_t>(), l["wait_cycles"].get<uint64_t>(), l["longest_wait"].get<uint64_t>(),
+             l["peak_occupancy"].get<uint64_t>(), 100.0 * ca["hit_rate"].get<double>());
+}
+
+void runReplay(RunArgs& a) {
   if (a.background.size() != 3)
     throw std::invalid_argument("--background: expected r,g,b (three linear values in [0,1])");
   for (float c : a.background)
@@ -79,7 +130,29 @@ void runFunctional(RunArgs& a) {
   const fs::path out(a.out);
   fs::remove(out / "report.json");
 
-  TimedRender run = renderWith(*src, *algo, clear, !a.quiet, a.algo);
+  const bool timing = a.mode == "timing";
+  // Resolve the ROP configuration before any work, so a bad --set fails at once.
+  std::optional<rop::ConfigTree> tree;
+  if (timing) tree = rop::resolveTree(a.preset, a.config_file, a.sets);
+
+  TimedRender run;
+  nlohmann::json timing_stats;
+  if (timing) {
+    Progress progress(a.algo + " (timing)", !a.quiet);
+    rop::TimingOptions to;
+    to.clear_colour = clear;
+    to.vcd_path = a.vcd;
+    to.progress = [&](double fraction, const std::string& what) { progress.update(fraction, what); };
+    rop::TimingResult t = rop::runTiming(*src, *algo, tree->config(), to);
+    progress.finish();
+    run.result.image = std::move(t.image);
+    run.result.counts = t.counts;
+    run.result.state_bytes = uint64_t(h.width) * h.height * algo->bytesPerPixel() + algo->poolBytes();
+    run.wall_seconds = t.wall_seconds;
+    timing_stats = std::move(t.stats);
+  } else {
+    run = renderWith(*src, *algo, clear, !a.quiet, a.algo);
+  }
   TimedRender ref;
   if (a.algo == "abuffer") {
     ref = run;
@@ -134,6 +207,19 @@ void runFunctional(RunArgs& a) {
   j["sim"] = {{"wall_seconds", run.wall_seconds},
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
+  if (timing) {
+    j["config"]["rop"] = tree->toJson();
+    // The timing model's sections; its fragment and memory sections extend the
+    // functional ones (same outcome counts: the functional insert decides them).
+    for (auto it = timing_stats.begin(); it != timing_stats.end(); ++it) {
+      if (it.key() == "fragments" || it.key() == "memory") {
+        for (auto f = it.value().begin(); f != it.value().end(); ++f) j[it.key()][f.key()] = f.value();
+      } else {
+        j[it.key()] = it.value();
+      }
+    }
+    if (!a.vcd.empty()) j["files"]["vcd"] = a.vcd;
+  }
   reports::requireFinite(j);
 
   // Everything is known: write images first, the report last (all atomic).
@@ -147,13 +233,15 @@ void runFunctional(RunArgs& a) {
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
              c.fragments_in, c.opaque, h.draws.size());
-  fmt::print("algorithm   {} (k={}, format {}), mode functional, {} pass(es) over the trace\n", a.algo,
-             a.params.layers, model::toString(a.params.format), c.source_passes);
+  fmt::print("algorithm   {} (k={}, format {}), mode {}{}, {} pass(es) over the trace\n", a.algo, a.params.layers,
+             model::toString(a.params.format), a.mode, timing ? ", preset " + tree->config().preset : "",
+             c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
   fmt::print("memory      {} B/pixel, {} of per-pixel state, {} read, {} written\n", algo->bytesPerPixel(),
              humanBytes(double(run.result.state_bytes)), humanBytes(double(c.bytes_read)),
              humanBytes(double(c.bytes_written)));
+  if (timing) printTimingSummary(j);
   fmt::print("image       vs abuffer: RMSE {:.6f}, PSNR {:.2f} dB, SSIM {:.5f}, max |err| {:.5f}, {} px > 1/255\n",
              m.rmse, m.psnr, m.ssim, m.max_abs, m.pixels_over_1_255);
   fmt::print("speed       {:.3f} s, {} fragments/s (reference {:.3f} s)\n", run.wall_seconds,
@@ -172,8 +260,12 @@ void addRunCommand(CLI::App& app) {
   std::string algos;
   for (const auto& info : model::algorithmNames()) algos += (algos.empty() ? "" : ", ") + std::string(info.name);
   cmd->add_option("--algo,-a", a->algo, "OIT algorithm: " + algos)->capture_default_str();
-  cmd->add_option("--mode", a->mode, "functional (image only); timing arrives with the SystemC ROP")
+  cmd->add_option("--mode", a->mode, "timing (SystemC ROP: cycles, stalls, DRAM) or functional (image only, faster)")
       ->capture_default_str();
+  cmd->add_option("--preset", a->preset, "ROP preset: igpu or dgpu (timing mode)")->capture_default_str();
+  cmd->add_option("--config", a->config_file, "JSON file of ROP parameters, applied over the preset (timing mode)");
+  cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)");
+  cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode)");
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
   cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b")->capture_default_str();
@@ -188,11 +280,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
   cmd->callback([a] {
     a->command_line = commandLine();
-    if (a->mode == "functional") {
-      runFunctional(*a);
-    } else if (a->mode == "timing") {
-      throw std::invalid_argument(
-          "--mode timing: the SystemC timing model is not built yet (issue 4); use --mode functional");
+    if (a->mode == "functional" || a->mode == "timing") {
+      runReplay(*a);
     } else {
       throw std::invalid_argument("--mode: expected functional or timing, got '" + a->mode + "'");
     }

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace oit::test {
 
@@ -30,9 +31,11 @@ inline CliResult runOitsim(const std::string& args) {
 }
 
 // A fresh directory under the test's working directory, removed on destruction.
+// The pid keeps tests that ctest runs in parallel processes apart.
 class TempDir {
  public:
-  explicit TempDir(const std::string& name) : path_(std::filesystem::current_path() / ("tmp_" + name)) {
+  explicit TempDir(const std::string& name)
+      : path_(std::filesystem::current_path() / ("tmp_" + name + "_" + std::to_string(::getpid()))) {
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

@@ -1,0 +1,164 @@
+// End-to-end tests of `oitsim gen` + `oitsim run` on the real executable: the
+// acceptance criteria of the foundation, golden-model and timing-model issues.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "CliRunner.hpp"
+
+namespace oit::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A small particles trace, shared by the tests of this file.
+class CliRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir("cli_run");
+    trace_ = dir_->file("p.oitt");
+    CliResult r = runOitsim("gen particles --width 160 --height 90 --count 300 --backdrop -o " + trace_);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static TempDir* dir_;
+  static std::string trace_;
+};
+TempDir* CliRun::dir_ = nullptr;
+std::string CliRun::trace_;
+
+TEST_F(CliRun, GenThenInfoPrintsStatistics) {
+  CliResult r = runOitsim("info " + trace_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("160 x 90"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("particles"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("depth complexity"), std::string::npos) << r.output;
+}
+
+TEST_F(CliRun, FunctionalMlabHasErrorAndAbufferHasNone) {
+  const std::string out = dir_->file("f_mlab");
+  CliResult r = runOitsim("run --mode functional --algo mlab --layers 4 -q --trace " + trace_ + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"})
+    EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;
+  nlohmann::json j = readJson(out + "/report.json");
+  EXPECT_GT(j["image"]["metrics"]["rmse"].get<double>(), 0.0);
+  const auto& f = j["fragments"];
+  EXPECT_EQ(f["in"].get<uint64_t>(), j["trace"]["fragments"].get<uint64_t>());
+  EXPECT_EQ(f["opaque"].get<uint64_t>() + f["culled_by_depth"].get<uint64_t>() + f["stored"].get<uint64_t>() +
+                f["merged"].get<uint64_t>() + f["discarded"].get<uint64_t>(),
+            f["in"].get<uint64_t>());
+  EXPECT_GT(f["merged"].get<uint64_t>(), 0u) << "300 overlapping particles must overflow 4 rows somewhere";
+  EXPECT_GT(j["sim"]["wall_seconds"].get<double>(), 0.0);
+  EXPECT_GT(j["sim"]["fragments_per_second"].get<double>(), 0.0);
+
+  const std::string ref = dir_->file("f_abuffer");
+  r = runOitsim("run --mode functional --algo abuffer -q --trace " + trace_ + " --out " + ref);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json a = readJson(ref + "/report.json");
+  EXPECT_EQ(a["image"]["metrics"]["rmse"].get<double>(), 0.0);
+  EXPECT_EQ(a["image"]["metrics"]["max_abs"].get<double>(), 0.0);
+  EXPECT_EQ(a["image"]["metrics"]["ssim"].get<double>(), 1.0);
+}
+
+TEST_F(CliRun, TimingReportHasEveryFieldAndTheFunctionalImage) {
+  const std::string out = dir_->file("t_mlab");
+  CliResult r = runOitsim("run --trace " + trace_ + " --algo mlab --layers 4 --preset igpu -q --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = readJson(out + "/report.json");
+  EXPECT_EQ(j["config"]["mode"], "timing");
+  EXPECT_EQ(j["config"]["rop"]["preset"], "igpu");
+  const auto& t = j["timing"];
+  const uint64_t cycles = t["cycles"].get<uint64_t>();
+  EXPECT_GT(cycles, 0u);
+  EXPECT_GT(t["frame_time_us"].get<double>(), 0.0);
+  for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {
+    uint64_t sum = it.value()["busy"].get<uint64_t>() + it.value()["idle"].get<uint64_t>();
+    for (const auto& s : it.value()["stalls"]) sum += s.get<uint64_t>();
+    EXPECT_EQ(sum, t["partition_cycles"].get<uint64_t>()) << it.key() << ": busy + stalls + idle != cycles";
+  }
+  EXPECT_TRUE(t["stages"]["pixel_lock"]["stalls"].contains("lock_wait"));
+  const auto& f = j["fragments"];
+  EXPECT_TRUE(f["outcomes_sum_to_in"].get<bool>());
+  EXPECT_EQ(f["in"].get<uint64_t>(), j["trace"]["fragments"].get<uint64_t>());
+  const auto& m = j["memory"];
+  for (const char* k : {"blend_arrays", "depth", "colour", "resolve"}) {
+    EXPECT_TRUE(m["dram_read_bytes"].contains(k)) << k;
+    EXPECT_TRUE(m["dram_write_bytes"].contains(k)) << k;
+    EXPECT_TRUE(m["footprint"]["allocated"].contains(k)) << k;
+  }
+  // The MLAB paper's footprint: W x H x bytes per pixel (fp32 rows: 20 B each).
+  EXPECT_EQ(m["footprint"]["allocated"]["blend_arrays"].get<uint64_t>(), 160u * 90u * 4u * 20u);
+  EXPECT_GT(m["mean_gbps"].get<double>(), 0.0);
+  EXPECT_TRUE(j["lock"].contains("conflicts"));
+  EXPECT_TRUE(j["lock"].contains("longest_wait"));
+  EXPECT_TRUE(j["lock"].contains("peak_occupancy"));
+  EXPECT_GE(j["cache"]["hit_rate"].get<double>(), 0.0);
+  EXPECT_LE(j["cache"]["hit_rate"].get<double>(), 1.0);
+  EXPECT_FALSE(j["timeseries"]["samples"].empty());
+  EXPECT_FALSE(j["per_draw"].empty());
+  EXPECT_GT(j["sim"]["wall_seconds"].get<double>(), 0.0);
+
+  // Timing decides when, the functional model what: the same image bits.
+  const std::string fn = dir_->file("t_functional");
+  ASSERT_EQ(runOitsim("run --mode functional --trace " + trace_ + " --algo mlab --layers 4 -q --out " + fn).exit_code, 0);
+  EXPECT_TRUE(readBytes(out + "/image.pfm") == readBytes(fn + "/image.pfm"));
+}
+
+TEST_F(CliRun, BadSetNamesTheOptionAndWritesNothing) {
+  const std::string out = dir_->file("bad_set");
+  CliResult r = runOitsim("run --trace " + trace_ + " --set lock.granularity=octagon -q --out " + out);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("lock.granularity"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "report.json"));
+}
+
+TEST_F(CliRun, TruncatedTraceFailsNamingByteOffsetAndLeavesNoReport) {
+  const std::string bytes = readBytes(trace_);
+  const std::string cut = dir_->file("cut.oitt");
+  const size_t keep = bytes.size() - 100;
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, keep);
+  for (const char* mode : {"functional", "timing"}) {
+    const std::string out = dir_->file(std::string("cut_") + mode);
+    CliResult r = runOitsim(std::string("run --mode ") + mode + " --trace " + cut + " -q --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("byte offset " + std::to_string(keep)), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(fs::path(out) / "report.json")) << mode;
+  }
+}
+
+TEST_F(CliRun, CsvTraceRunsDirectlyWithWidthAndHeight) {
+  const std::string csv = dir_->file("t.csv");
+  std::ofstream(csv) << "draw,prim,x,y,z,r,g,b,a,opaque\n"
+                        "0,0,1,1,0.5,1,0,0,0.5,0\n"
+                        "0,1,1,1,0.25,0,0,1,0.5,0\n";
+  const std::string out = dir_->file("csv_run");
+  CliResult r = runOitsim("run --mode functional --algo alpha --trace " + csv + " --width 4 --height 4 -q --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = readJson(out + "/report.json");
+  EXPECT_EQ(j["trace"]["width"], 4);
+  EXPECT_EQ(j["fragments"]["in"], 2);
+  // Submission order = depth order reversed here, so over-blending is exact.
+  EXPECT_EQ(j["image"]["metrics"]["rmse"].get<double>(), 0.0);
+}
+
+}  // namespace
+}  // namespace oit::test
