@@ -254,6 +254,8 @@ void runReplay(RunArgs& a) {
 void addRunCommand(CLI::App& app) {
   auto a = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand("run", "Replay a trace through an OIT algorithm; write images and report.json");
+  // A later option wins, so scripts can pass defaults and users override them.
+  cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cmd->add_option("--trace,-t", a->trace, "Trace file (.oitt binary or .csv)")->required();
   cmd->add_option("--out,-o", a->out, "Output folder for image.png, image.pfm, reference.pfm, diff.png, report.json")
       ->required();
@@ -264,7 +266,8 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--preset", a->preset, "ROP preset: igpu or dgpu (timing mode)")->capture_default_str();
   cmd->add_option("--config", a->config_file, "JSON file of ROP parameters, applied over the preset (timing mode)");
-  cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)");
+  cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode)");
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
@@ -274,7 +277,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--seed", a->params.seed, "Seed of the per-fragment random hash")->capture_default_str();
   cmd->add_option("--background", a->background, "Clear colour r,g,b (linear) where no opaque fragment landed")
       ->delimiter(',')
-      ->expected(3);
+      ->expected(3)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cmd->add_option("--width", a->width, "Frame width of a CSV trace without a width comment");
   cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");

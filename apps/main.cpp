@@ -4,14 +4,20 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <stdlib.h>
 #include <exception>
 
 #include "apps/Commands.hpp"
+#include "oit_rop/SystemcInfo.hpp"
+
+// libsystemc's entry (C linkage), normally called by its own main().
+extern "C" int sc_elab_and_sim(int argc, char* argv[]);
 
 extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::setCommandLine(argc, argv);
   CLI::App app{"oitsim: cycle-approximate GPU ROP model for order-independent transparency"};
-  app.set_version_flag("--version", std::string("oitsim ") + OITSIM_VERSION);
+  app.set_version_flag("--version",
+                       std::string("oitsim ") + OITSIM_VERSION + " (SystemC " + oit::rop::systemcRelease() + ")");
   app.require_subcommand(1);
   oit::cli::addGenCommand(app);
   oit::cli::addScenesCommand(app);
@@ -31,4 +37,12 @@ extern "C" int sc_main(int argc, char* argv[]) {
     return 1;
   }
   return 0;
+}
+
+// Our own main, ahead of libsystemc's: it silences SystemC's banner (reports
+// and summaries are oitsim's own; `oitsim --version` names the SystemC release)
+// and then enters SystemC as its main would.
+int main(int argc, char* argv[]) {
+  setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0);
+  return sc_elab_and_sim(argc, argv);
 }

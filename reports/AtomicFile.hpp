@@ -7,7 +7,7 @@
 
 namespace oit::reports {
 
-// Throws std::runtime_error naming the path on any I/O failure; the target is
+// Throws (a std::runtime_error naming the path) on any I/O failure; the target is
 // untouched then and the temporary removed.
 void writeFileAtomically(const std::string& path, std::string_view content);
 

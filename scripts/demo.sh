@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's main command: set up, build, make the default scene, replay it,
 # print a summary and where the report is.
-#   scripts/demo.sh [extra options for `oitsim run`, e.g. --algo hybrid --layers 8]
+#   scripts/demo.sh [options for `oitsim run` that override the defaults, e.g. --algo hybrid --layers 8 --preset dgpu]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${OITSIM_BUILD_DIR:-$root/build}
@@ -20,7 +20,8 @@ echo
 echo "== 2. the trace"
 "$oitsim" info "$out/demo.oitt"
 echo
-echo "== 3. replay through the OIT model"
-"$oitsim" run --trace "$out/demo.oitt" --out "$out/run" "$@"
+echo "== 3. replay through the SystemC ROP model: MLAB, 4 rows of the paper's 8-byte format, integrated-GPU preset"
+"$oitsim" run --trace "$out/demo.oitt" --out "$out/run" --mode timing --preset igpu \
+  --algo mlab --layers 4 --format rgba8t8z32 "$@"
 echo
 echo "report: $out/run/report.json (images beside it: image.png, reference.pfm, diff.png)"
