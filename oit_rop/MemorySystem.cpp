@@ -110,6 +110,8 @@ unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).chan
 unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
 uint64_t MemorySystem::rowOf(uint64_t addr) const { return locate(addr).row; }
 
+void MemorySystem::setSampleInterval(Cycle interval_cycles) { sample_interval_ = interval_cycles; }
+
 Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
   if (bytes == 0) return now;  // nothing to move; not counted as a request
   // Ticks must not overflow: 2^48 cycles is far beyond any frame.
@@ -149,6 +151,11 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
     const uint64_t xfer = std::max(column + cl_ticks_, bus);
     const uint64_t end = xfer + burst_ticks_;
     bus = end;
+    if (sample_interval_) {
+      const size_t bucket = size_t((xfer >> kTickShift) / sample_interval_);
+      if (bucket >= stats_.bus_bytes_per_interval.size()) stats_.bus_bytes_per_interval.resize(bucket + 1, 0);
+      stats_.bus_bytes_per_interval[bucket] += cfg_.burst_bytes;
+    }
     bank.last_end = std::max(bank.last_end, end);
     if (!cfg_.open_row) bank.act_ready = bank.last_end + trp_ticks_;  // auto-precharge after the data
     busy_ticks_[loc.channel] += burst_ticks_;

@@ -24,6 +24,12 @@ struct MemoryStats {
   uint64_t row_hits = 0, row_misses = 0;
   std::vector<Cycle> channel_busy;  // core cycles each channel's data bus was busy
   Cycle last_completion = 0;
+  // Bytes the data buses moved (whole bursts), bucketed by the cycle each burst
+  // started on its bus, per setSampleInterval() interval. Bucketing by bus time,
+  // not by request time, keeps every interval within the channels' bandwidth
+  // (up to one burst per channel at the boundary) even when partitions book
+  // requests ahead of each other inside a SystemC quantum.
+  std::vector<uint64_t> bus_bytes_per_interval;
   uint64_t readBytes() const;
   uint64_t writeBytes() const;
 };
@@ -35,6 +41,8 @@ class MemorySystem {
   // channels by interleave_bytes). Returns the completion cycle (>= now + latency).
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s);
   const MemoryStats& stats() const;
+  // Enables MemoryStats::bus_bytes_per_interval (0 disables it).
+  void setSampleInterval(Cycle interval_cycles);
   // Peak bytes per core cycle the channels can move together.
   double peakBytesPerCycle() const;
 
@@ -54,6 +62,7 @@ class MemorySystem {
   uint64_t rowOf(uint64_t addr) const;
 
  private:
+  Cycle sample_interval_ = 0;
   // Time inside the model is kept in ticks: 1 core cycle = 2^kTickShift ticks,
   // so fractional DRAM timings and bandwidths do not accumulate rounding.
   static constexpr unsigned kTickShift = 16;
