@@ -12,6 +12,7 @@ void addInfoCommand(CLI::App& app);     // oitsim info TRACE
 void addConvertCommand(CLI::App& app);  // oitsim convert IN OUT
 void addRunCommand(CLI::App& app);      // oitsim run --trace T ...
 void addScenesCommand(CLI::App& app);   // oitsim scenes
+void addCaptureCommand(CLI::App& app);  // oitsim capture --mesh M -o FILE (headless GL)
 void addStressCommand(CLI::App& app);   // oitsim stress [--out DIR]
 void addConfigCommand(CLI::App& app);   // oitsim config [--preset P] [--config F] [--set a.b=v]
 

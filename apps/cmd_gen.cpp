@@ -121,12 +121,12 @@ void addScenesCommand(CLI::App& app) {
           s.default_count ? fmt::format(" [default {} {}]", s.default_count, s.count_unit) : "";
       fmt::print("  {:<10} {}{}\n", s.name, s.description, count);
     }
-    fmt::print("\nNamed meshes (--mesh NAME; any .obj/.off/.ply file, optionally .gz, by path):\n");
+    fmt::print("\nNamed meshes (--mesh NAME for gen mesh and capture; any .obj/.off/.ply file,\n"
+               "optionally .gz, by path):\n");
     for (const gen::NamedMesh& m : gen::namedMeshes()) {
-      const std::string state = gen::fileReadable(m.path)
-                                    ? "installed"
-                                    : fmt::format("missing: apt-get install {}", m.package);
-      fmt::print("  {:<10} {} (package {}, {})\n             {}\n", m.name, m.description, m.package,
+      const std::string state =
+          gen::fileReadable(m.path) ? "installed" : fmt::format("missing: {}", gen::meshInstallHint(m));
+      fmt::print("  {:<12} {} (package {}, {})\n               {}\n", m.name, m.description, m.package,
                  state, m.path);
     }
   });

@@ -21,6 +21,7 @@ extern "C" int sc_main(int argc, char* argv[]) {
   app.require_subcommand(1);
   oit::cli::addGenCommand(app);
   oit::cli::addScenesCommand(app);
+  oit::cli::addCaptureCommand(app);
   oit::cli::addInfoCommand(app);
   oit::cli::addConvertCommand(app);
   oit::cli::addRunCommand(app);

@@ -11,6 +11,10 @@ packages=(
   libcli11-dev nlohmann-json3-dev libpng-dev zlib1g-dev
   # real meshes: the Stanford bunny
   glmark2-data
+  # headless OpenGL for `oitsim capture`: Mesa's EGL (surfaceless) and llvmpipe
+  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  # `oitsim report` (plots, PFM conversion), YAML sweep specs, the report's browser test
+  python3 python3-matplotlib python3-yaml chromium
 )
 
 missing=()
@@ -20,8 +24,13 @@ for p in "${packages[@]}"; do
   fi
 done
 
+# More real meshes (libcgal-demo's elephant, armadillo, dragon, ...), unpacked
+# from the .deb by their own idempotent script, after the packages are in place.
+meshes() { "$(dirname "$0")/install-meshes.sh"; }
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages present"
+  meshes
   exit 0
 fi
 
@@ -34,4 +43,5 @@ echo "setup: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 "${sudo[@]}" apt-get update -qq
 "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+meshes
 echo "setup: done"

@@ -393,11 +393,40 @@ MeshBounds meshBounds(const Mesh& mesh) {
   return b;
 }
 
+// Where scripts/install-meshes.sh keeps the meshes of libcgal-demo's data.tar.gz.
+constexpr const char* kCgalMeshDir = "/var/cache/oitsim/meshes/cgal";
+
 // Add a row to make another installed mesh available by name.
 const std::vector<NamedMesh>& namedMeshes() {
   static const std::vector<NamedMesh> table = {
       {"bunny", "/usr/share/glmark2/models/bunny.obj", "glmark2-data",
        "Stanford bunny, 69,666 triangles (glmark2's copy)"},
+      {"elephant", std::string(kCgalMeshDir) + "/refined_elephant.off", "libcgal-demo",
+       "elephant, 88,928 triangles"},
+      {"bunny-cgal", std::string(kCgalMeshDir) + "/bunny00.off", "libcgal-demo",
+       "Stanford bunny, 75,408 triangles (CGAL's copy)"},
+      {"armadillo", std::string(kCgalMeshDir) + "/armadillo.off", "libcgal-demo",
+       "Stanford armadillo, 52,000 triangles"},
+      {"diplodocus", std::string(kCgalMeshDir) + "/diplodocus.off", "libcgal-demo",
+       "diplodocus, 47,960 triangles"},
+      {"man", std::string(kCgalMeshDir) + "/man.off", "libcgal-demo",
+       "standing man, 34,986 triangles"},
+      {"mannequin", std::string(kCgalMeshDir) + "/mannequin-devil.off", "libcgal-demo",
+       "mannequin, 25,888 triangles"},
+      {"dragon", std::string(kCgalMeshDir) + "/ChineseDragon-10kv.off", "libcgal-demo",
+       "Chinese dragon, 19,994 triangles"},
+      {"camel", std::string(kCgalMeshDir) + "/camel.off", "libcgal-demo",
+       "camel, 19,536 triangles"},
+      {"lion", std::string(kCgalMeshDir) + "/lion.off", "libcgal-demo",
+       "lion, 14,859 triangles"},
+      {"bull", std::string(kCgalMeshDir) + "/bull.off", "libcgal-demo",
+       "bull, 12,396 triangles"},
+      {"homer", std::string(kCgalMeshDir) + "/homer.off", "libcgal-demo",
+       "Homer Simpson, 9,856 triangles"},
+      {"cow", std::string(kCgalMeshDir) + "/cow.off", "libcgal-demo",
+       "cow, 5,804 triangles"},
+      {"triceratops", std::string(kCgalMeshDir) + "/triceratops.off", "libcgal-demo",
+       "triceratops, 5,660 triangles"},
   };
   return table;
 }
@@ -406,6 +435,13 @@ const NamedMesh* findNamedMesh(std::string_view name, const std::vector<NamedMes
   for (const NamedMesh& m : table)
     if (m.name == name) return &m;
   return nullptr;
+}
+
+std::string meshInstallHint(const NamedMesh& m) {
+  // libcgal-demo's meshes sit in a tarball inside the package, which also pulls in
+  // Qt: the script unpacks just the meshes.
+  if (m.package == "libcgal-demo") return "scripts/install-meshes.sh unpacks them from it";
+  return "apt-get install " + m.package;
 }
 
 bool fileReadable(const std::string& path) {
@@ -417,9 +453,8 @@ std::string resolveMeshPath(const std::string& name_or_path, const std::vector<N
   if (const NamedMesh* m = findNamedMesh(name_or_path, table)) {
     if (!fileReadable(m->path))
       throw std::runtime_error(fmt::format(
-          "mesh '{}' needs {}, which is not installed: it comes with the Debian package {} "
-          "(apt-get install {})",
-          m->name, m->path, m->package, m->package));
+          "mesh '{}' needs {}, which is not installed: it comes with the Debian package {} ({})",
+          m->name, m->path, m->package, meshInstallHint(*m)));
     return m->path;
   }
   std::error_code ec;

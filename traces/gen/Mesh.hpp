@@ -47,6 +47,8 @@ const std::vector<NamedMesh>& namedMeshes();
 const NamedMesh* findNamedMesh(std::string_view name,
                                const std::vector<NamedMesh>& table = namedMeshes());
 bool fileReadable(const std::string& path);
+// How to install a named mesh's file: "apt-get install PACKAGE" or the script to run.
+std::string meshInstallHint(const NamedMesh& m);
 
 // A named mesh's path, or the argument itself when it names no mesh. Throws
 // std::runtime_error when a named mesh's file is missing (saying which package
