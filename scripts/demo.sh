@@ -14,8 +14,8 @@ oitsim="$build/apps/oitsim"
 mkdir -p "$out"
 
 echo
-echo "== 1. default scene: opaque backdrop + transparent Stanford bunny + particles (1280x720)"
-"$oitsim" gen demo --backdrop -o "$out/demo.oitt"
+echo "== 1. default scene, captured through Mesa's OpenGL: the transparent Stanford bunny over an opaque backdrop (1280x720)"
+"$oitsim" capture --mesh bunny --backdrop --width 1280 --height 720 --verify -o "$out/demo.oitt"
 echo
 echo "== 2. the trace"
 "$oitsim" info "$out/demo.oitt"
