@@ -32,7 +32,9 @@ double BlendAlu::formatRate(const AluConfig& cfg, const model::StateLayout& layo
 void BlendAlu::issue(Cycle now, uint32_t token, unsigned rows, bool drop) {
   rate_.take();
   rows = std::min<unsigned>(rows, unsigned(done_.size() - 1));
-  done_[rows].push({now + latency(rows), token});
+  const Cycle done = now + latency(rows);
+  done_[rows].push({done, token});
+  next_done_ = std::min(next_done_, done);
   ++in_flight_;
   if (drop) {
     ++stats_.dropped;
@@ -40,14 +42,6 @@ void BlendAlu::issue(Cycle now, uint32_t token, unsigned rows, bool drop) {
     ++stats_.blends;
     stats_.rows += rows;
   }
-}
-
-Cycle BlendAlu::nextCompletion() const {
-  Cycle c = kNever;
-  if (in_flight_ == 0) return c;
-  for (const auto& q : done_)
-    if (!q.empty()) c = std::min(c, q.front().first);
-  return c;
 }
 
 }  // namespace oit::rop

@@ -6,6 +6,7 @@
 // per row count (no priority queue).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -40,16 +41,19 @@ class BlendAlu {
   // Calls f(token) for each blend finishing at `now`.
   template <class F>
   void complete(Cycle now, F&& f) {
-    if (in_flight_ == 0) return;
-    for (auto& q : done_)
+    if (in_flight_ == 0 || now < next_done_) return;  // nothing due (the common cycle)
+    next_done_ = kNever;
+    for (auto& q : done_) {
       while (!q.empty() && q.front().first <= now) {
         const uint32_t t = q.front().second;
         q.pop();
         --in_flight_;
         f(t);
       }
+      if (!q.empty()) next_done_ = std::min(next_done_, q.front().first);
+    }
   }
-  Cycle nextCompletion() const;
+  Cycle nextCompletion() const { return in_flight_ ? next_done_ : kNever; }
   size_t inFlight() const { return in_flight_; }
   const AluStats& stats() const { return stats_; }
 
@@ -58,6 +62,9 @@ class BlendAlu {
   RateLimiter rate_;
   std::vector<Fifo<std::pair<Cycle, uint32_t>>> done_;  // index: rows
   size_t in_flight_ = 0;
+  // Earliest completion in flight: each FIFO holds one latency, so its front is
+  // its earliest and the minimum over the fronts is exact.
+  Cycle next_done_ = kNever;
   AluStats stats_;
 };
 

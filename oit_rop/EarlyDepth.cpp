@@ -47,8 +47,4 @@ Cycle EarlyDepth::nextEvent(Cycle now) const {
   return std::max(h.ready, rate_.nextAvailable(now));
 }
 
-bool EarlyDepth::headWaitsForDepth(Cycle now) const {
-  return !q_.empty() && q_.front().ready > now && q_.front().passed <= now;
-}
-
 }  // namespace oit::rop

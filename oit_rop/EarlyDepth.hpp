@@ -45,7 +45,9 @@ class EarlyDepth {
   // Earliest cycle > now at which leave() can move something (kNever if empty).
   Cycle nextEvent(Cycle now) const;
   // The stage's status at `now` after leave() moved `moved` fragments.
-  bool headWaitsForDepth(Cycle now) const;
+  bool headWaitsForDepth(Cycle now) const {
+    return !q_.empty() && q_.front().ready > now && q_.front().passed <= now;
+  }
   size_t size() const { return q_.size(); }
   const EarlyDepthStats& stats() const { return stats_; }
 

@@ -110,7 +110,10 @@ unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).chan
 unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
 uint64_t MemorySystem::rowOf(uint64_t addr) const { return locate(addr).row; }
 
-void MemorySystem::setSampleInterval(Cycle interval_cycles) { sample_interval_ = interval_cycles; }
+void MemorySystem::setSampleInterval(Cycle interval_cycles) {
+  sample_interval_ = interval_cycles;
+  bucket_begin_ = kNoBucket;  // the next burst computes its bucket
+}
 
 Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
   if (bytes == 0) return now;  // nothing to move; not counted as a request
@@ -152,9 +155,16 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
     const uint64_t end = xfer + burst_ticks_;
     bus = end;
     if (sample_interval_) {
-      const size_t bucket = size_t((xfer >> kTickShift) / sample_interval_);
-      if (bucket >= stats_.bus_bytes_per_interval.size()) stats_.bus_bytes_per_interval.resize(bucket + 1, 0);
-      stats_.bus_bytes_per_interval[bucket] += cfg_.burst_bytes;
+      // Bursts come in bus order per channel, so the last bucket usually
+      // matches: skip the division then.
+      const Cycle c = xfer >> kTickShift;
+      if (c < bucket_begin_ || c - bucket_begin_ >= sample_interval_) {
+        last_bucket_ = size_t(c / sample_interval_);
+        bucket_begin_ = Cycle(last_bucket_) * sample_interval_;
+        if (last_bucket_ >= stats_.bus_bytes_per_interval.size())
+          stats_.bus_bytes_per_interval.resize(last_bucket_ + 1, 0);
+      }
+      stats_.bus_bytes_per_interval[last_bucket_] += cfg_.burst_bytes;
     }
     bank.last_end = std::max(bank.last_end, end);
     if (!cfg_.open_row) bank.act_ready = bank.last_end + trp_ticks_;  // auto-precharge after the data

@@ -63,6 +63,9 @@ class MemorySystem {
 
  private:
   Cycle sample_interval_ = 0;
+  size_t last_bucket_ = 0;  // bus_bytes_per_interval index of [bucket_begin_, + sample_interval_)
+  static constexpr Cycle kNoBucket = ~Cycle(0);
+  Cycle bucket_begin_ = kNoBucket;
   // Time inside the model is kept in ticks: 1 core cycle = 2^kTickShift ticks,
   // so fractional DRAM timings and bandwidths do not accumulate rounding.
   static constexpr unsigned kTickShift = 16;

@@ -51,33 +51,48 @@ class Fifo {
 // nextDue(), so no bucket is skipped. Within a bucket, scheduling order.
 class TimingWheel {
  public:
-  explicit TimingWheel(unsigned horizon) : buckets_(std::bit_ceil(std::max(horizon, 2u))) {}
+  explicit TimingWheel(unsigned horizon)
+      : buckets_(std::bit_ceil(std::max(horizon, 2u))), used_((buckets_.size() + 63) / 64, 0) {}
   unsigned horizon() const { return unsigned(buckets_.size()); }
   void schedule(Cycle due, uint32_t token) {
-    buckets_[due & (buckets_.size() - 1)].push_back(token);
+    const size_t i = due & (buckets_.size() - 1);
+    buckets_[i].push_back(token);
+    used_[i >> 6] |= uint64_t(1) << (i & 63);
     ++count_;
   }
   // Calls f(token) for every token due at `now`, in scheduling order.
   template <class F>
   void drain(Cycle now, F&& f) {
-    auto& b = buckets_[now & (buckets_.size() - 1)];
+    const size_t i = now & (buckets_.size() - 1);
+    auto& b = buckets_[i];
     if (b.empty()) return;
     for (uint32_t t : b) f(t);
     count_ -= b.size();
     b.clear();
+    used_[i >> 6] &= ~(uint64_t(1) << (i & 63));
   }
-  // First cycle after `now` with a due token (kNever when empty).
+  // First cycle after `now` with a due token (kNever when empty): the first
+  // set bit of the occupancy bitmap from bucket now + 1 on, wrapping around.
   Cycle nextDue(Cycle now) const {
     if (count_ == 0) return kNever;
-    const size_t mask = buckets_.size() - 1;
-    for (Cycle c = now + 1; c <= now + buckets_.size(); ++c)
-      if (!buckets_[c & mask].empty()) return c;
-    return kNever;
+    const size_t mask = buckets_.size() - 1, start = (now + 1) & mask, words = used_.size();
+    const size_t w0 = start >> 6;
+    uint64_t w = used_[w0] & (~uint64_t(0) << (start & 63));
+    for (size_t k = 0;; ++k) {
+      if (w) {
+        const size_t i = ((w0 + k) % words) * 64 + size_t(std::countr_zero(w));
+        return now + 1 + ((i - start) & mask);
+      }
+      if (k == words) return kNever;
+      w = used_[(w0 + k + 1) % words];
+      if (k + 1 == words) w &= ~(~uint64_t(0) << (start & 63));  // wrapped: the bits below start
+    }
   }
   size_t size() const { return count_; }
 
  private:
   std::vector<std::vector<uint32_t>> buckets_;
+  std::vector<uint64_t> used_;  // bit i: bucket i holds tokens
   size_t count_ = 0;
 };
 

@@ -102,10 +102,17 @@ void PixelLock::arrive(Cycle now, uint32_t t) {
   Token& k = tok_[t];
   ++stats_.arrivals;
   k.arrived = now;
-  Slot& s = map_[find(k.address)];
-  const bool eligible = cfg_.ordered ? s.head == int32_t(t) : !s.busy;
+  // Ordered: the head of the address's list is the token with no older one
+  // (prev < 0), so no map lookup is needed.
+  bool eligible;
+  if (cfg_.ordered) {
+    eligible = k.prev < 0;
+  } else {
+    Slot& s = map_[find(k.address)];
+    eligible = !s.busy;
+    if (eligible) s.busy = true;
+  }
   if (eligible) {
-    if (!cfg_.ordered) s.busy = true;
     admit(now, t);
   } else {
     k.state = State::Waiting;
@@ -125,22 +132,30 @@ void PixelLock::enterFront(Cycle now) {
   if (k.prev >= 0) ++stats_.out_of_order_entries;
 }
 
-void PixelLock::unlink(uint32_t t) {
+size_t PixelLock::unlink(uint32_t t) {
   Token& k = tok_[t];
-  const size_t si = find(k.address);
-  Slot& s = map_[si];
-  if (k.prev >= 0)
+  // The address's slot changes only when t is its oldest or newest token.
+  size_t si = kNpos;
+  if (k.prev >= 0) {
     tok_[size_t(k.prev)].next = k.next;
-  else
-    s.head = k.next;
-  if (k.next >= 0)
+  } else {
+    si = find(k.address);
+    map_[si].head = k.next;
+  }
+  if (k.next >= 0) {
     tok_[size_t(k.next)].prev = k.prev;
-  else
-    s.tail = k.prev;
+  } else {
+    if (si == kNpos) si = find(k.address);
+    map_[si].tail = k.prev;
+  }
   k.prev = k.next = -1;
   k.state = State::Free;
   free_.push_back(t);
-  if (s.head < 0) eraseSlot(si);
+  if (si != kNpos && map_[si].head < 0) {
+    eraseSlot(si);
+    return kNpos;  // no fragment of the address left in flight
+  }
+  return si;  // kNpos also when t sat in the middle of its list (slot unchanged)
 }
 
 void PixelLock::wakeNext(Cycle now, size_t si) {
@@ -160,18 +175,25 @@ void PixelLock::wakeNext(Cycle now, size_t si) {
 }
 
 void PixelLock::drop(Cycle now, uint32_t t) {
-  const uint32_t a = tok_[t].address;
-  unlink(t);
-  const size_t si = find(a);
+  const bool was_head = tok_[t].prev < 0;
+  const size_t si = unlink(t);
   // Ordered: the dropped fragment may have been the one blocking the next.
-  if (si != kNpos && cfg_.ordered) wakeNext(now, si);
+  // (Only a dropped head unblocks anyone: a head is never left waiting.)
+  if (cfg_.ordered && was_head && si != kNpos) wakeNext(now, si);
 }
 
 void PixelLock::release(Cycle now, uint32_t t) {
   const uint32_t a = tok_[t].address;
-  unlink(t);
-  const size_t si = find(a);
-  if (si == kNpos) return;
+  const size_t si = unlink(t);
+  if (si == kNpos && !cfg_.ordered) {
+    // Unordered: a released fragment in the middle of its list still frees the address.
+    const size_t sj = find(a);
+    if (sj == kNpos) return;
+    map_[sj].busy = false;
+    wakeNext(now, sj);
+    return;
+  }
+  if (si == kNpos) return;  // ordered: a middle token never holds the lock
   if (!cfg_.ordered) map_[si].busy = false;
   wakeNext(now, si);
 }

@@ -76,7 +76,10 @@ class PixelLock {
   size_t find(uint32_t address) const;  // slot index holding address, or npos
   size_t findOrInsert(uint32_t address);
   void eraseSlot(size_t i);
-  void unlink(uint32_t token);  // removes from its address list; may erase the slot
+  // Removes the token from its address list (erasing the slot when it empties).
+  // Returns the slot when t was its list's head or tail and the list is not
+  // empty now, else npos.
+  size_t unlink(uint32_t token);
   void admit(Cycle now, uint32_t token);
   void wakeNext(Cycle now, size_t slot);
 

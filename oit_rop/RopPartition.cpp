@@ -61,8 +61,8 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
 }
 
 void RopPartition::advance(Cycle next, bool count_skip) {
+  // Stage accounting is lazy (setStatus adds a status's span when it changes).
   const Cycle span = next - now_;
-  for (size_t i = 0; i < kStageCount; ++i) res_.accounts.stage[i].add(status_[i], span);
   if (count_skip && span > 1) res_.skipped_idle += span - 1;
   now_ = next;
   if (now_ >= next_sync_) {
@@ -77,12 +77,21 @@ void RopPartition::advance(Cycle next, bool count_skip) {
   }
 }
 
-void RopPartition::setStatus(Stage st, StageStatus v) { status_[size_t(st)] = v; }
+void RopPartition::setAll(StageStatus v) {
+  for (size_t i = 0; i < kStageCount; ++i) setStatus(Stage(i), v);
+}
+
+void RopPartition::flushAccounts() {
+  for (size_t i = 0; i < kStageCount; ++i) {
+    res_.accounts.stage[i].add(status_[i], now_ - since_[i]);
+    since_[i] = now_;
+  }
+}
 
 void RopPartition::opaquePhase() {
   for (uint32_t t = 0; t < geo_.tiles(); ++t)
     if (geo_.partitionOf(t) == id_) owned_.push_back(t);
-  status_.fill(StageStatus::idle());
+  setAll(StageStatus::idle());
   // Without fast clear every blending-array tile is written clear at frame start.
   if (!cfg_.skip.fast_clear)
     for (uint32_t t : owned_)
@@ -107,7 +116,7 @@ void RopPartition::opaquePhase() {
     access(now_, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, true, Surface::Colour);
   }
   if (start + cycles > now_) advance(start + cycles, false);
-  status_.fill(StageStatus::idle());
+  setAll(StageStatus::idle());
 }
 
 void RopPartition::release(uint32_t t) {
@@ -343,7 +352,7 @@ void RopPartition::waitForFrontEnd() {
 }
 
 void RopPartition::resolvePhase() {
-  status_.fill(StageStatus::idle());
+  setAll(StageStatus::idle());
   if (node_pending_) {  // flush the node write-combiner
     access(now_, node_addr_, uint32_t(node_pending_), true, Surface::BlendArrays);
     node_addr_ += node_pending_;
@@ -450,6 +459,7 @@ void RopPartition::run() {
   while (transparentStep()) {
   }
   resolvePhase();
+  flushAccounts();
   res_.end = now_;
   done_ = true;
   done_event_.notify(sc_core::SC_ZERO_TIME);

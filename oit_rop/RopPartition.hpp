@@ -92,8 +92,18 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   };
 
   void run();
-  void advance(Cycle next, bool count_skip);  // accounting of [now, next) + quantum keeper
-  void setStatus(Stage st, StageStatus v);
+  void advance(Cycle next, bool count_skip);  // now_ = next, skip count, quantum keeper
+  // The status of stage st from now_ on (holds until changed). Spans are
+  // accounted when a status changes, not every evaluated cycle.
+  void setStatus(Stage st, StageStatus v) {
+    const size_t i = size_t(st);
+    if (v.kind == status_[i].kind && v.cause == status_[i].cause) return;
+    res_.accounts.stage[i].add(status_[i], now_ - since_[i]);
+    status_[i] = v;
+    since_[i] = now_;
+  }
+  void setAll(StageStatus v);
+  void flushAccounts();  // accounts every stage's current status up to now_
   void opaquePhase();
   bool transparentStep();  // one cycle; false when every pass drained
   Cycle nextEvent(bool refused, bool sb_full, bool draining);
@@ -130,6 +140,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   Cycle now_ = 0, next_sync_ = 0;
   std::vector<uint32_t> owned_;  // tiles of this partition
   std::array<StageStatus, kStageCount> status_{};
+  std::array<Cycle, kStageCount> since_{};  // cycle the current status_[i] began
   bool starving_ = false;
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;

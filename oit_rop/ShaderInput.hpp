@@ -38,6 +38,10 @@ class ShaderInput {
   RateLimiter rate_;
   TimingWheel wheel_;
   uint64_t issued_ = 0;
+  bool fixed_ = true;
+  uint64_t span_ = 1;                    // latency_max - latency_min + 1
+  unsigned mix_pass_ = ~0u;              // pass whose hash half is in pass_mix_
+  uint64_t pass_mix_ = 0;
 };
 
 }  // namespace oit::rop

@@ -29,7 +29,11 @@ struct ChildRun {
 
 inline ChildRun runInChild(const std::function<TimingResult()>& f) {
   int fd[2];
-  if (pipe(fd) != 0) return {false, "pipe failed"};
+  if (pipe(fd) != 0) {
+    ChildRun failed;
+    failed.error = "pipe failed";
+    return failed;
+  }
   const pid_t pid = fork();
   if (pid == 0) {
     close(fd[0]);

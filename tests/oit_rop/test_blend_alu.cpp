@@ -39,7 +39,9 @@ TEST(BlendAlu, Fp32RateQuartersThroughputAndLatencyGrowsWithRows) {
   for (size_t i = 0; i < done.size(); ++i) {
     const uint32_t t = done[i].second;
     EXPECT_EQ(done[i].first, issued_at[t] + (t % 2 ? 16u : 8u));
-    if (i) EXPECT_GE(done[i].first, done[i - 1].first);
+    if (i) {
+      EXPECT_GE(done[i].first, done[i - 1].first);
+    }
   }
   EXPECT_EQ(alu.stats().rows, 5u * 4u);
 }

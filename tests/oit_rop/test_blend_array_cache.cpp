@@ -303,5 +303,26 @@ TEST(BlendArrayCache, Deterministic) {
   EXPECT_GT(a.writebacks, 0u);
 }
 
+
+// An exactly fitting cache (128 KiB of 2 KiB lines: 64 lines, 8 ways, 8 sets)
+// over a 64x64 frame of 8x8 tiles (64 tiles) in raster order, two layers: every
+// tile misses once (set = tile % 8 = tile column; 8 tiles per set), the
+// second layer hits everywhere.
+TEST(BlendArrayCache, ExactlyFittingCacheMissesEachTileOnceInRasterOrder) {
+  MemorySystem mem(roundDram(), kMhz);
+  CacheConfig cfg = cacheOf(1, 8);
+  cfg.size_bytes = 128 * 1024;
+  BlendArrayCache cache(cfg, 2048, 64, 0, mem, false);
+  ASSERT_EQ(cache.lines(), 64u);
+  ASSERT_EQ(cache.sets(), 8u);
+  Cycle now = 0;
+  for (int layer = 0; layer < 2; ++layer)
+    for (uint32_t y = 0; y < 64; ++y)
+      for (uint32_t x = 0; x < 64; ++x, ++now) acquireRetrying(cache, now, (y / 8) * 8 + x / 8, true);
+  EXPECT_EQ(cache.stats().misses, 64u);
+  EXPECT_EQ(cache.stats().hits, 2u * 64 * 64 - 64);
+  EXPECT_EQ(cache.stats().evictions, 0u);
+}
+
 }  // namespace
 }  // namespace oit::rop

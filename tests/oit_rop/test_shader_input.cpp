@@ -39,7 +39,10 @@ TEST(ShaderInput, FixedLatencyAndIssueRate) {
   std::vector<std::pair<Cycle, uint32_t>> out;
   for (Cycle now = 0; now < 40; ++now) {
     s.finished(now, [&](uint32_t t) { out.push_back({now, t}); });
-    if (s.slots(now) > 0 && issued < 10) s.issue(now, issued++, issued, 0);
+    if (s.slots(now) > 0 && issued < 10) {
+      const uint32_t t = issued++;
+      s.issue(now, t, t, 0);  // fixed latency: the sequence number does not matter
+    }
   }
   ASSERT_EQ(out.size(), 10u);
   for (size_t i = 1; i < out.size(); ++i) EXPECT_EQ(out[i].first - out[i - 1].first, 2u);  // one every 2 cycles
