@@ -15,6 +15,8 @@ void addScenesCommand(CLI::App& app);   // oitsim scenes
 void addCaptureCommand(CLI::App& app);  // oitsim capture --mesh M -o FILE (headless GL)
 void addStressCommand(CLI::App& app);   // oitsim stress [--out DIR]
 void addConfigCommand(CLI::App& app);   // oitsim config [--preset P] [--config F] [--set a.b=v]
+void addSweepCommand(CLI::App& app);   // oitsim sweep SPEC --out DIR [--jobs N] [--emit slurm]
+void addReportCommand(CLI::App& app);  // oitsim report DIR -> DIR/report.html
 
 // The command line as typed (recorded in reports so a run can be repeated).
 void setCommandLine(int argc, char* argv[]);

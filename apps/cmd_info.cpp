@@ -7,6 +7,7 @@
 
 #include "apps/Commands.hpp"
 #include "apps/Progress.hpp"
+#include "model/Image.hpp"
 #include "traces/TraceStats.hpp"
 
 namespace oit::cli {
@@ -16,6 +17,7 @@ struct InfoArgs {
   std::string trace;
   uint32_t width = 0, height = 0;
   bool json = false;
+  std::string heatmap;  // --heatmap FILE.pfm
 };
 
 nlohmann::json complexityJson(const ComplexityStats& c) {
@@ -56,11 +58,33 @@ void printComplexity(const char* title, const ComplexityStats& c, uint64_t pixel
   }
 }
 
+// Transparent fragments per pixel as a grey PFM (count in every channel), for
+// the sweep report's depth-complexity heatmap; a second pass over the trace.
+void writeHeatmap(FragmentSource& src, const std::string& path) {
+  const TraceHeader& h = src.header();
+  std::vector<bool> transparent;
+  for (const DrawInfo& d : h.draws) {
+    if (d.id >= transparent.size()) transparent.resize(d.id + 1, false);
+    transparent[d.id] = d.cls == DrawClass::Transparent;
+  }
+  model::Image img(h.width, h.height);
+  src.rewind();
+  for (auto batch = src.next(); !batch.empty(); batch = src.next())
+    for (const Fragment& f : batch)
+      if (f.draw < transparent.size() && transparent[f.draw]) img.pixels[img.index(f.x, f.y)].r += 1.0f;
+  for (model::Rgb& p : img.pixels) p.g = p.b = p.r;
+  model::writePfm(img, path);
+}
+
 void runInfo(const InfoArgs& a) {
   OpenOptions opts;
   opts.width = a.width;
   opts.height = a.height;
   auto src = openTrace(a.trace, opts);
+  if (!a.heatmap.empty()) {
+    writeHeatmap(*src, a.heatmap);
+    src->rewind();
+  }
   Progress progress("info", !a.json);
   TraceStats st = computeTraceStats(*src, [&](uint64_t done, uint64_t total) {
     progress.update(total ? double(done) / double(total) : 0.0, humanCount(double(done)) + " fragments");
@@ -123,6 +147,8 @@ void addInfoCommand(CLI::App& app) {
   cmd->add_option("--width", args->width, "Frame width of a CSV trace without a width comment");
   cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment");
   cmd->add_flag("--json", args->json, "Print the statistics as JSON");
+  cmd->add_option("--heatmap", args->heatmap,
+                  "Also write transparent fragments per pixel (depth complexity) as a PFM file");
   cmd->callback([args] { runInfo(*args); });
 }
 

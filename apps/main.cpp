@@ -27,6 +27,8 @@ extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::addRunCommand(app);
   oit::cli::addStressCommand(app);
   oit::cli::addConfigCommand(app);
+  oit::cli::addSweepCommand(app);
+  oit::cli::addReportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

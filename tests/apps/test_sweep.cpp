@@ -1,0 +1,381 @@
+// End-to-end tests of `oitsim sweep` and `oitsim report` on the real
+// executable: the acceptance sweep (3 algorithms x 3 k x 2 generated traces),
+// failed points, spec errors, YAML, Slurm emission, and the HTML report rendered
+// by a real headless Chromium.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <cmath>
+#include <sstream>
+
+#include "CliRunner.hpp"
+#include "model/Image.hpp"
+
+namespace oit::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+nlohmann::json readJson(const std::string& path) { return nlohmann::json::parse(readText(path)); }
+
+// Splits a CSV line that results.csv wrote (quoted fields may hold commas).
+std::vector<std::string> csvSplit(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool q = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (q) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (c == '"') {
+        q = false;
+      } else {
+        cur += c;
+      }
+    } else if (c == '"') {
+      q = true;
+    } else if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+const char* kSpec = R"({
+  "traces": [
+    {"gen": "particles", "width": 160, "height": 90, "count": 300, "backdrop": true},
+    {"gen": "hair", "width": 160, "height": 90}
+  ],
+  "base": {"mode": "functional", "format": "fp32"},
+  "axes": {"algo": ["mlab", "hybrid", "adaptive"], "layers": [2, 4, 8]}
+})";
+
+// The acceptance sweep, run once for the tests of this file.
+class Sweep : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir("sweep");
+    writeText(dir_->file("spec.json"), kSpec);
+    out_ = dir_->file("out");
+    result_ = new CliResult(runOitsim("sweep " + dir_->file("spec.json") + " --out " + out_ + " --jobs 2"));
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete dir_;
+  }
+  static TempDir* dir_;
+  static CliResult* result_;
+  static std::string out_;
+};
+TempDir* Sweep::dir_ = nullptr;
+CliResult* Sweep::result_ = nullptr;
+std::string Sweep::out_;
+
+TEST_F(Sweep, EveryPointRunsAndLandsInOneTable) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  EXPECT_NE(result_->output.find("18 points, 18 ok, 0 failed"), std::string::npos) << result_->output;
+  EXPECT_NE(result_->output.find("[18/18]"), std::string::npos) << "progress lines: " << result_->output;
+
+  const auto csv = lines(readText(out_ + "/results.csv"));
+  ASSERT_EQ(csv.size(), 19u);  // header + 18 points
+  const auto header = csvSplit(csv[0]);
+  std::map<std::string, size_t> col;
+  for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* k : {"id", "trace", "status", "error", "wall_seconds", "axis.algo", "axis.layers",
+                        "image.metrics.rmse", "image.metrics.ssim", "fragments.in", "config.algorithm",
+                        "memory.state_bytes", "sim.wall_seconds"})
+    EXPECT_TRUE(col.count(k)) << "results.csv lacks column " << k;
+
+  const nlohmann::json res = readJson(out_ + "/results.json");
+  ASSERT_EQ(res["points"].size(), 18u);
+  EXPECT_EQ(res["summary"]["failed"].get<int>(), 0);
+  // Traces vary slowest, then algo, then layers (spec order).
+  EXPECT_EQ(res["points"][0]["id"], "0000-particles-mlab-2");
+  EXPECT_EQ(res["points"][17]["id"], "0017-hair-adaptive-8");
+  for (size_t i = 0; i < 18; ++i) {
+    const auto& p = res["points"][i];
+    const auto row = csvSplit(csv[i + 1]);
+    EXPECT_EQ(row[col["id"]], p["id"].get<std::string>());
+    EXPECT_EQ(row[col["status"]], "ok");
+    // The table holds the point's own report, flattened.
+    const nlohmann::json rep = readJson(out_ + "/points/" + p["id"].get<std::string>() + "/report.json");
+    EXPECT_EQ(p["metrics"]["image.metrics.rmse"].get<double>(), rep["image"]["metrics"]["rmse"].get<double>());
+    EXPECT_EQ(p["metrics"]["config.algorithm"], p["axes"]["algo"]);
+    EXPECT_EQ(p["metrics"]["config.layers"].get<int>(), std::stoi(p["axes"]["layers"].get<std::string>()));
+    EXPECT_EQ(p["metrics"]["config.mode"], "functional");
+    EXPECT_EQ(p["metrics"]["trace.width"].get<int>(), 160);
+    EXPECT_GT(p["metrics"]["image.metrics.rmse"].get<double>(), 0.0) << p["id"];
+    EXPECT_EQ(p["metrics"]["fragments.passes.0.name"].is_string(), true);  // arrays of objects by index
+  }
+  // MLAB's state is k rows of 16 bytes (fp32): 2, 4 and 8 rows per pixel.
+  const auto& pts = res["points"];
+  EXPECT_EQ(pts[0]["metrics"]["memory.bytes_per_pixel"].get<int>() * 2,
+            pts[1]["metrics"]["memory.bytes_per_pixel"].get<int>());
+  EXPECT_EQ(pts[1]["metrics"]["memory.bytes_per_pixel"].get<int>() * 2,
+            pts[2]["metrics"]["memory.bytes_per_pixel"].get<int>());
+  // More MLAB rows on 300 overlapping particles: less error.
+  EXPECT_GT(pts[0]["metrics"]["image.metrics.rmse"].get<double>(), pts[2]["metrics"]["image.metrics.rmse"].get<double>());
+  // Both traces were generated into the sweep folder and replayed.
+  EXPECT_TRUE(fs::exists(out_ + "/traces/particles.oitt"));
+  EXPECT_TRUE(fs::exists(out_ + "/traces/hair.oitt"));
+  EXPECT_NE(pts[0]["metrics"]["trace.fragments"], pts[9]["metrics"]["trace.fragments"]);
+}
+
+TEST_F(Sweep, TableIsDeterministicApartFromWallClock) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  const std::string again = dir_->file("again");
+  // One job this time: scheduling must not change the table.
+  CliResult r = runOitsim("sweep " + dir_->file("spec.json") + " --out " + again + " --jobs 1 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto a = lines(readText(out_ + "/results.csv"));
+  const auto b = lines(readText(again + "/results.csv"));
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a[0], b[0]);
+  const auto header = csvSplit(a[0]);
+  size_t compared = 0;
+  for (size_t i = 1; i < a.size(); ++i) {
+    const auto ra = csvSplit(a[i]), rb = csvSplit(b[i]);
+    ASSERT_EQ(ra.size(), header.size());
+    for (size_t c = 0; c < header.size(); ++c) {
+      const std::string& h = header[c];
+      // Wall clock differs by nature; paths and the command line name the output folder.
+      if (h.find("wall_seconds") != std::string::npos || h.find("per_second") != std::string::npos ||
+          h == "trace.path" || h == "oitsim.command")
+        continue;
+      EXPECT_EQ(ra[c], rb[c]) << "row " << i << " column " << h;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 18u * 20u);
+}
+
+TEST_F(Sweep, SlurmEmitsOneTaskPerPointAndReportMergesWhatRan) {
+  const std::string out = dir_->file("slurm");
+  CliResult r = runOitsim("sweep " + dir_->file("spec.json") + " --out " + out + " --emit slurm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string script = readText(out + "/sweep.slurm");
+  EXPECT_NE(script.find("#SBATCH --array=0-17"), std::string::npos) << script;
+  const auto cmds = lines(readText(out + "/commands.txt"));
+  ASSERT_EQ(cmds.size(), 18u);
+  EXPECT_FALSE(fs::exists(out + "/points/0000-particles-mlab-2/report.json")) << "--emit must not run points";
+  // What Slurm task 3 would do (the script's own line selection).
+  ASSERT_EQ(std::system(("cd " + out + " && SLURM_ARRAY_TASK_ID=3 bash sweep.slurm").c_str()), 0);
+  EXPECT_TRUE(fs::exists(out + "/points/0003-particles-hybrid-2/report.json"));
+  r = runOitsim("report -q " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json res = readJson(out + "/results.json");
+  EXPECT_EQ(res["summary"]["ok"].get<int>(), 1);
+  EXPECT_EQ(res["summary"]["failed"].get<int>(), 17);
+  EXPECT_EQ(res["points"][3]["status"], "ok");
+  EXPECT_EQ(res["points"][0]["error"], "not run");
+}
+
+TEST_F(Sweep, ReportIsSelfContainedAndRendersInHeadlessChromium) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  CliResult r = runOitsim("report " + out_);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string page = readText(out_ + "/report.html");
+  // Every image is embedded: 2 traces x (Pareto + heatmap + reference + 3 images + 3 diffs).
+  size_t uris = 0;
+  for (size_t at = page.find("src=\"data:image/png;base64,"); at != std::string::npos;
+       at = page.find("src=\"data:image/png;base64,", at + 1))
+    ++uris;
+  EXPECT_EQ(uris, 2u * 9u);
+  EXPECT_EQ(page.find("src=\"file:"), std::string::npos);
+  EXPECT_EQ(page.find("src=\"http"), std::string::npos);
+  EXPECT_NE(page.find("0017-hair-adaptive-8"), std::string::npos);
+
+  if (!fs::exists("/usr/bin/chromium")) GTEST_SKIP() << "chromium is absent (scripts/setup.sh installs it)";
+  const std::string profile = dir_->file("chromium-profile");
+  const std::string flags = "--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                            "--disable-background-networking --disable-component-update --disable-sync "
+                            "--user-data-dir=" + profile + " ";
+  const std::string url = "file://" + fs::absolute(out_ + "/report.html").string();
+  // The page's own script counts the images that decoded (naturalWidth > 0).
+  const std::string dom_file = dir_->file("dom.html");
+  ASSERT_EQ(std::system(("/usr/bin/chromium " + flags + "--virtual-time-budget=5000 --dump-dom " + url + " > " +
+                         dom_file + " 2>/dev/null").c_str()), 0);
+  const std::string dom = readText(dom_file);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(dom, m, std::regex(R"re(data-images="(\d+)" data-decoded="(\d+)")re"))) << dom.substr(0, 2000);
+  EXPECT_EQ(m[1].str(), "18");
+  EXPECT_EQ(m[2].str(), "18") << "images that failed to decode in Chromium";
+
+  // The screenshot: the first Pareto plot and image strip must not be blank.
+  const std::string shot = dir_->file("shot.png");
+  ASSERT_EQ(std::system(("/usr/bin/chromium " + flags + "--screenshot=" + shot + " --window-size=1400,2000 " + url +
+                         " >/dev/null 2>&1").c_str()), 0);
+  ASSERT_TRUE(fs::exists(shot));
+  // Non-white pixel share in the top 2000 px (plots and images, not just text),
+  // measured with Debian's python3 (matplotlib reads PNG).
+  const std::string probe = dir_->file("probe.txt");
+  ASSERT_EQ(std::system(("/usr/bin/python3 -c \"import matplotlib.image as m, sys; a = m.imread(sys.argv[1])[:, :, :3]; "
+                         "nw = (a.min(axis=2) < 0.9); print(a.shape[1], a.shape[0], nw.mean())\" " + shot + " > " +
+                         probe).c_str()), 0);
+  std::istringstream in(readText(probe));
+  int w = 0, h = 0;
+  double share = 0;
+  in >> w >> h >> share;
+  EXPECT_EQ(w, 1400);
+  EXPECT_EQ(h, 2000);
+  EXPECT_GT(share, 0.05) << "screenshot " << shot << " is mostly blank";
+}
+
+TEST(SweepErrors, FailedPointIsReportedAndTheSweepGoesOn) {
+  TempDir d("sweep_fail");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "functional"}, "axes": {"algo": ["mlab", "nosuchalgo", "hybrid"]}})");
+  CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o") + " -j 2");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("3 points, 2 ok, 1 failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("FAILED 0001-glass-nosuchalgo"), std::string::npos) << r.output;
+  const nlohmann::json res = readJson(d.file("o") + "/results.json");
+  EXPECT_EQ(res["points"][1]["status"], "failed");
+  EXPECT_NE(res["points"][1]["error"].get<std::string>().find("nosuchalgo"), std::string::npos)
+      << res["points"][1]["error"];
+  EXPECT_EQ(res["points"][2]["status"], "ok");
+  EXPECT_TRUE(fs::exists(d.file("o") + "/points/0002-glass-hybrid/report.json"));
+}
+
+TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
+  TempDir d("sweep_spec");
+  writeText(d.file("bad_axis.json"), R"({"traces": [{"gen": "glass"}], "axes": {"colour": ["red"]}})");
+  CliResult r = runOitsim("sweep " + d.file("bad_axis.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("bad_axis.json: axes.colour[0]: unknown setting 'colour'"), std::string::npos) << r.output;
+
+  writeText(d.file("no_traces.json"), R"({"axes": {"algo": ["mlab"]}})");
+  r = runOitsim("sweep " + d.file("no_traces.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("no_traces.json: key 'traces' must be a non-empty list"), std::string::npos) << r.output;
+
+  writeText(d.file("missing.json"), R"({"traces": ["nowhere.oitt"]})");
+  r = runOitsim("sweep " + d.file("missing.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("missing.json: traces[0]: trace " + d.file("nowhere.oitt") + " does not exist"),
+            std::string::npos)
+      << r.output;
+
+  writeText(d.file("broken.json"), R"({"traces": [)");
+  r = runOitsim("sweep " + d.file("broken.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("broken.json: not valid JSON"), std::string::npos) << r.output;
+}
+
+TEST(SweepErrors, BadRopParameterStopsTheSweepBeforeAnyPointRuns) {
+  TempDir d("sweep_rop");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "axes": {"sim.quantum_cycle": [1, 1000]}})");
+  CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("s.json: point 0000-glass-1: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sim.quantum_cycle"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-glass-1/report.json"));
+}
+
+// The report's depth-complexity heatmap: transparent fragments per pixel.
+TEST(InfoHeatmap, CountsEveryTransparentFragmentOnce) {
+  TempDir d("heatmap");
+  CliResult r = runOitsim("gen particles --width 96 --height 54 --count 200 --backdrop -o " + d.file("p.oitt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = runOitsim("info --json --heatmap " + d.file("h.pfm") + " " + d.file("p.oitt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  const model::Image h = model::readPfm(d.file("h.pfm"));
+  ASSERT_EQ(h.width, 96u);
+  ASSERT_EQ(h.height, 54u);
+  double sum = 0, mx = 0;
+  uint64_t covered = 0;
+  for (const auto& p : h.pixels) {
+    sum += p.r;
+    mx = std::max(mx, double(p.r));
+    covered += p.r > 0;
+    EXPECT_EQ(p.r, p.g);
+  }
+  const auto& t = j["depth_complexity"]["transparent"];
+  EXPECT_EQ(uint64_t(sum), t["fragments"].get<uint64_t>());
+  EXPECT_EQ(uint64_t(mx), t["max"].get<uint64_t>());
+  EXPECT_EQ(covered, t["covered_pixels"].get<uint64_t>());
+  EXPECT_GT(sum, 0.0);
+}
+
+TEST(SweepYaml, YamlSpecWithBundlesAndRopParameters) {
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "python3 (python3-yaml) absent: YAML specs unavailable";
+  TempDir d("sweep_yaml");
+  writeText(d.file("s.yaml"), R"(traces:
+  - {gen: glass, width: 64, height: 48, name: panes}
+base: {algo: mlab, layers: 4}
+axes:
+  speed:
+    - {label: functional, mode: functional}
+    - {label: cycle, mode: timing, set: {skip.idle_cycles: false, sim.quantum_cycles: 1}}
+    - {label: fast, mode: timing, set: {skip.idle_cycles: true, sim.quantum_cycles: 5000}}
+  cache.ways: [4]
+)");
+  CliResult r = runOitsim("sweep " + d.file("s.yaml") + " --out " + d.file("o") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json res = readJson(d.file("o") + "/results.json");
+  ASSERT_EQ(res["points"].size(), 3u);
+  EXPECT_EQ(res["points"][0]["id"], "0000-panes-functional-4");
+  EXPECT_EQ(res["points"][0]["metrics"]["config.mode"], "functional");
+  const auto& t = res["points"][1]["metrics"];
+  EXPECT_EQ(t["config.mode"], "timing");
+  EXPECT_EQ(t["config.rop.sim.quantum_cycles"].get<int>(), 1);
+  EXPECT_EQ(t["config.rop.skip.idle_cycles"].get<bool>(), false);
+  EXPECT_EQ(t["config.rop.cache.ways"].get<int>(), 4);
+  EXPECT_EQ(t["timing.skipped_idle_cycles"].get<int>(), 0);
+  EXPECT_GT(t["timing.cycles"].get<int>(), 0);
+
+  // The report's speed-mode figures: the fast mode against the cycle-by-cycle one.
+  r = runOitsim("report -q " + d.file("o"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json sp = readJson(d.file("o") + "/speed.json");
+  const auto& f = res["points"][2]["metrics"];
+  ASSERT_EQ(sp["rows"].size(), 3u);
+  std::map<std::string, nlohmann::json> by_mode;
+  for (const auto& row : sp["rows"]) by_mode[row["mode"].get<std::string>()] = row;
+  ASSERT_TRUE(by_mode.count("functional") && by_mode.count("timing q=1 skip=off") && by_mode.count("timing q=5000 skip=on"))
+      << sp.dump(1);
+  EXPECT_EQ(by_mode["timing q=1 skip=off"]["cycle_err_pct"].get<double>(), 0.0);
+  const double c0 = t["timing.cycles"].get<double>(), c1 = f["timing.cycles"].get<double>();
+  EXPECT_NEAR(by_mode["timing q=5000 skip=on"]["cycle_err_pct"].get<double>(), 100.0 * std::abs(c1 - c0) / c0, 1e-9);
+  EXPECT_NEAR(by_mode["timing q=5000 skip=on"]["speedup"].get<double>(),
+              t["sim.wall_seconds"].get<double>() / f["sim.wall_seconds"].get<double>(), 1e-9);
+  EXPECT_FALSE(by_mode["functional"].contains("cycle_err_pct"));
+  EXPECT_EQ(sp["modes"].size(), 1u);  // only the fast mode is judged
+  const auto& v = sp["modes"]["timing q=5000 skip=on"];
+  EXPECT_EQ(v["goal_met"].get<bool>(),
+            v["max_cycle_err_pct"].get<double>() <= 1.0 && v["min_speedup"].get<double>() >= 10.0);
+  const std::string page = readText(d.file("o") + "/report.html");
+  EXPECT_NE(page.find("Simulator speed modes"), std::string::npos);
+  EXPECT_NE(page.find("Stalls and lock waits"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace oit::test
