@@ -1,12 +1,17 @@
-// Runs the built oitsim executable and captures its exit code and output.
+// Runs the built oitsim executable and captures its exit code and output;
+// file and CSV helpers shared by the CLI tests.
 #pragma once
 
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace oit::test {
 
@@ -17,10 +22,10 @@ struct CliResult {
 
 inline std::string oitsimPath() { return std::string(OITSIM_BINARY_DIR) + "/apps/oitsim"; }
 
-inline CliResult runOitsim(const std::string& args) {
+// Runs a shell command; exit code -1 if it did not exit normally.
+inline CliResult runShell(const std::string& command) {
   CliResult r;
-  const std::string cmd = oitsimPath() + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
   if (!p) return r;
   std::array<char, 4096> buf;
   size_t n;
@@ -28,6 +33,58 @@ inline CliResult runOitsim(const std::string& args) {
   const int status = pclose(p);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+inline CliResult runOitsim(const std::string& args) { return runShell(oitsimPath() + " " + args); }
+
+inline std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline void writeText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+inline nlohmann::json readJson(const std::filesystem::path& path) { return nlohmann::json::parse(readText(path)); }
+
+inline std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+// Splits a CSV line as results.csv writes it (quoted fields may hold commas
+// and doubled quotes).
+inline std::vector<std::string> csvSplit(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cur += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
 }
 
 // A fresh directory under the test's working directory, removed on destruction.

@@ -21,16 +21,6 @@ const char* kCsv =
     "1,3,2,1,0.1,1,1,1,0.5,0\n"
     "1,3,3,1,0.1,1,1,1,0.5,0\n";
 
-void writeText(const std::string& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 TEST(CliInfo, CsvStatisticsAsJson) {
   TempDir dir("info_json");
   writeText(dir.file("t.csv"), kCsv);

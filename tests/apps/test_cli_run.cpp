@@ -14,18 +14,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json readJson(const std::string& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
-
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // A small particles trace, shared by the tests of this file.
 class CliRun : public ::testing::Test {
  protected:
@@ -120,7 +108,7 @@ TEST_F(CliRun, TimingReportHasEveryFieldAndTheFunctionalImage) {
   // Timing decides when, the functional model what: the same image bits.
   const std::string fn = dir_->file("t_functional");
   ASSERT_EQ(runOitsim("run --mode functional --trace " + trace_ + " --algo mlab --layers 4 -q --out " + fn).exit_code, 0);
-  EXPECT_TRUE(readBytes(out + "/image.pfm") == readBytes(fn + "/image.pfm"));
+  EXPECT_TRUE(readText(out + "/image.pfm") == readText(fn + "/image.pfm"));
 }
 
 TEST_F(CliRun, BadSetNamesTheOptionAndWritesNothing) {
@@ -132,7 +120,7 @@ TEST_F(CliRun, BadSetNamesTheOptionAndWritesNothing) {
 }
 
 TEST_F(CliRun, TruncatedTraceFailsNamingByteOffsetAndLeavesNoReport) {
-  const std::string bytes = readBytes(trace_);
+  const std::string bytes = readText(trace_);
   const std::string cut = dir_->file("cut.oitt");
   const size_t keep = bytes.size() - 100;
   std::ofstream(cut, std::ios::binary) << bytes.substr(0, keep);

@@ -37,66 +37,11 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string tail(const fs::path& path, size_t max_chars = 1500) {
   if (!fs::exists(path)) return "(" + path.string() + " does not exist)";
   std::string s = readText(path);
   if (s.size() > max_chars) s = "..." + s.substr(s.size() - max_chars);
   return path.string() + ":\n" + s;
-}
-
-// Runs a shell command; returns its exit code (-1 if it did not exit) and output.
-std::pair<int, std::string> shell(const std::string& cmd) {
-  std::string out;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return {-1, ""};
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-// Splits a CSV line that results.csv wrote (quoted fields may hold commas).
-std::vector<std::string> csvSplit(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool q = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (q) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (c == '"') {
-        q = false;
-      } else {
-        cur += c;
-      }
-    } else if (c == '"') {
-      q = true;
-    } else if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-std::vector<std::string> lines(const std::string& text) {
-  std::vector<std::string> out;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
 }
 
 // Two TCP ports free right now (held open together so they differ).
@@ -128,7 +73,7 @@ class LocalSlurm {
     if (::mkdtemp(tmpl)) dir_ = tmpl;
   }
   ~LocalSlurm() {
-    if (!job_.empty()) shell("timeout 10 scancel " + job_);
+    if (!job_.empty()) runShell("timeout 10 scancel " + job_);
     // slurmd first (it owns the job steps), then the controller, then munged.
     for (auto it = pids_.rbegin(); it != pids_.rend(); ++it) stop(*it);
     if (had_conf_) ::setenv("SLURM_CONF", old_conf_.c_str(), 1);
@@ -207,7 +152,7 @@ class LocalSlurm {
     spawn({"/usr/sbin/slurmd", "-D", "-N", "localhost", "-f", conf}, dir_ / "slurmd.out");
     std::string state;
     const bool idle = waitFor(std::chrono::seconds(20), [&] {
-      state = shell("timeout 5 /usr/bin/sinfo -h -N -o %t").second;
+      state = runShell("timeout 5 /usr/bin/sinfo -h -N -o %t").output;
       return state.find("idle") != std::string::npos;
     });
     if (!idle)
@@ -313,7 +258,7 @@ TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
   ASSERT_FALSE(fs::exists(out / "points/0000-particles-mlab/report.json")) << "--emit must not run points";
 
   // Submit and wait (bounded): sbatch --wait exits with the array's highest task exit code.
-  auto [rc, sb] = shell("cd " + d.string() + " && timeout 60 /usr/bin/sbatch --parsable --wait " +
+  auto [rc, sb] = runShell("cd " + d.string() + " && timeout 60 /usr/bin/sbatch --parsable --wait " +
                         (out / "sweep.slurm").string());
   std::string job = sb.substr(0, sb.find_first_of(";\n"));
   if (!job.empty() && job.find_first_not_of("0123456789") == std::string::npos) cluster.setJob(job);
