@@ -16,6 +16,7 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
+#include "traces/gen/Backdrop.hpp"
 #include "traces/gen/Math.hpp"
 #include "traces/gen/Mesh.hpp"
 
@@ -363,7 +364,7 @@ struct Capturer::Impl {
     gen::Camera c = gen::Camera::orbit({0, 0, 0}, opts.azimuth_deg.value_or(30.0) + azimuth_offset,
                                        opts.elevation_deg.value_or(5.0), dist, fovy, aspect);
     c.near_plane = std::max(0.05 * dist, dist - 2.0 - spread);
-    c.far_plane = dist + 4.0 + 1.7 + spread;
+    c.far_plane = dist + 4.0 + gen::Backdrop::kWallBehind + spread;
     return c;
   }
 
@@ -381,34 +382,15 @@ struct Capturer::Impl {
     for (const std::string& name : names) header.draws.push_back({id++, DrawClass::Transparent, name});
   }
 
-  // gen's addBackdrop: checkered wall and floor facing the camera, then a pillar.
+  // The shared backdrop (traces/gen/Backdrop.hpp): checkered wall and floor, then a pillar.
   void addBackdrop(Scene& s) const {
-    constexpr float kFloorY = -1.05f, kWallBehind = 1.7f, kCell = 0.25f;
-    constexpr int kGrid = 8;
-    Vec3 fwd = s.camera.target - s.camera.eye;
-    fwd.y = 0;
-    fwd = gen::length(fwd) > 1e-4f ? gen::normalize(fwd) : Vec3{0, 0, -1};
-    const Vec3 right = gen::normalize(gen::cross(fwd, Vec3{0, 1, 0}));
-    const Vec3 up{0, 1, 0};
-    const float dist = gen::length(s.camera.eye - s.camera.target);
-    const float extent = 4.0f * (dist + 2.0f);
-    static_assert(kCell == 0.25f, "the fragment shader's checker uses 0.25");
+    using gen::Backdrop;
+    static_assert(Backdrop::kCell == 0.25f, "the fragment shader's checker uses 0.25");
+    const Backdrop bd = gen::makeBackdrop(s.camera.eye, s.camera.target);
 
     DrawGeom wall{0, DrawClass::Opaque, {}};
-    const Vec3 base = fwd * kWallBehind + Vec3{0, kFloorY, 0};
-    const Vec3 bl = base - right * extent, br = base + right * extent;
-    const Vec3 tl = bl + up * (2 * extent), tr = br + up * (2 * extent);
-    const Vec3 nl = bl - fwd * (2 * extent), nr = br - fwd * (2 * extent);
-    struct Surface {
-      Vec3 p00, p10, p01, p11, u_axis, v_axis;
-      std::array<float, 3> light, dark;
-    };
-    const Surface surfaces[2] = {
-        {bl, br, tl, tr, right, up, {0.80f, 0.80f, 0.82f}, {0.62f, 0.63f, 0.66f}},
-        {br, bl, nr, nl, right, fwd, {0.58f, 0.52f, 0.45f}, {0.34f, 0.30f, 0.27f}},
-    };
     auto mix = [](const Vec3& a, const Vec3& b, float t) { return a * (1.0f - t) + b * t; };
-    for (const Surface& sf : surfaces) {
+    for (const Backdrop::Checker& sf : bd.surfaces) {
       Part part;
       part.first_tri = s.triCount();
       part.shade = kChecker;
@@ -417,11 +399,11 @@ struct Capturer::Impl {
       part.axis_u = sf.u_axis;
       part.axis_v = sf.v_axis;
       auto at = [&](int i, int j) {
-        const float u = static_cast<float>(i) / kGrid, v = static_cast<float>(j) / kGrid;
+        const float u = static_cast<float>(i) / Backdrop::kGrid, v = static_cast<float>(j) / Backdrop::kGrid;
         return mix(mix(sf.p00, sf.p10, u), mix(sf.p01, sf.p11, u), v);
       };
-      for (int j = 0; j < kGrid; ++j)
-        for (int i = 0; i < kGrid; ++i) {
+      for (int j = 0; j < Backdrop::kGrid; ++j)
+        for (int i = 0; i < Backdrop::kGrid; ++i) {
           s.tri(at(i, j), at(i + 1, j), at(i + 1, j + 1), {});
           s.tri(at(i, j), at(i + 1, j + 1), at(i, j + 1), {});
         }
@@ -434,17 +416,9 @@ struct Capturer::Impl {
     Part part;
     part.first_tri = s.triCount();
     part.shade = kLambertOneSided;
-    part.colour = {0.18f, 0.42f, 0.48f};
-    constexpr float kHalf = 0.11f, kTop = 0.85f;
-    const float half_h = (kTop - kFloorY) / 2;
-    const Vec3 centre = right * 0.55f + fwd * 0.15f + Vec3{0, kFloorY + half_h, 0};
-    Vec3 corner[8];
-    for (int k = 0; k < 8; ++k)
-      corner[k] = centre + right * ((k & 1) ? kHalf : -kHalf) + up * ((k & 2) ? half_h : -half_h) +
-                  fwd * ((k & 4) ? kHalf : -kHalf);
-    constexpr int kFaces[6][4] = {{1, 5, 7, 3}, {0, 2, 6, 4}, {2, 3, 7, 6},
-                                  {0, 4, 5, 1}, {4, 6, 7, 5}, {0, 1, 3, 2}};
-    for (const auto& q : kFaces) {
+    part.colour = Backdrop::kPillarColour;
+    const Vec3* corner = bd.pillar;
+    for (const auto& q : Backdrop::kPillarFaces) {
       const Vec3 n = gen::normalize(gen::cross(corner[q[1]] - corner[q[0]], corner[q[3]] - corner[q[0]]));
       s.tri(corner[q[0]], corner[q[1]], corner[q[2]], n);
       s.tri(corner[q[0]], corner[q[2]], corner[q[3]], n);

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "traces/gen/Backdrop.hpp"
 #include "traces/gen/Math.hpp"
 #include "traces/gen/Mesh.hpp"
 #include "traces/gen/Random.hpp"
@@ -19,8 +20,8 @@ namespace scene_impl {
 
 // World layout shared by the scenes: transparent content within ~1 of the origin,
 // an optional floor just below it and a back wall behind it.
-constexpr float kFloorY = -1.05f;
-constexpr float kWallBehind = 1.7f;  // wall distance behind the origin, along the view
+constexpr float kFloorY = Backdrop::kFloorY;
+constexpr float kWallBehind = Backdrop::kWallBehind;
 
 struct Catalogue {
   const char* name;
@@ -229,13 +230,6 @@ struct ScenePlan {
     passes.push_back({draw, prims, cull, std::move(run)});
   }
 
-  // Horizontal view direction and its right-hand side, for camera-aligned backdrops.
-  std::pair<Vec3, Vec3> horizontalFrame() const {
-    Vec3 f = camera.target - camera.eye;
-    f.y = 0;
-    f = length(f) > 1e-4f ? normalize(f) : Vec3{0, 0, -1};
-    return {f, normalize(cross(f, Vec3{0, 1, 0}))};
-  }
   // Light from the upper left of the viewer, for the Lambert terms.
   Vec3 lightDir() const {
     return normalize(-camera.forward() + camera.trueUp() * 0.8f - camera.right() * 0.6f);
@@ -297,36 +291,16 @@ void setCamera(Plan& p, double azimuth, double elevation, double fit_radius) {
 // Opaque checkered back wall and floor, then an opaque pillar standing in the
 // content so the transparent draws are partly hidden (depth culling matters).
 void addBackdrop(Plan& p) {
-  const auto frame = p.horizontalFrame();
-  const Vec3 fwd = frame.first, right = frame.second;
-  const Vec3 up{0, 1, 0};
-  const float dist = length(p.camera.eye - p.camera.target);
-  const float extent = 4.0f * (dist + 2.0f);  // wider than any view of the wall
+  const Backdrop bd = makeBackdrop(p.camera.eye, p.camera.target);
   const Mat4 vp = p.vp;
-  constexpr float kCell = 0.25f;  // checker square size in world units
-  constexpr int kGrid = 8;
 
   const uint32_t wall_id = p.addDraw("backdrop", DrawClass::Opaque);
-  p.addPass(wall_id, 2 * 2 * kGrid * kGrid, CullMode::Back, [=](Emitter& e) {
-    // The wall's bottom edge is the floor's far edge, built from the same corners.
-    const Vec3 base = fwd * kWallBehind + Vec3{0, kFloorY, 0};
-    const Vec3 bl = base - right * extent, br = base + right * extent;
-    const Vec3 tl = bl + up * (2 * extent), tr = br + up * (2 * extent);
-    const Vec3 nl = bl - fwd * (2 * extent), nr = br - fwd * (2 * extent);
-    struct Surface {
-      Vec3 p00, p10, p01, p11;
-      Vec3 u_axis, v_axis;  // checker directions
-      std::array<float, 3> light, dark;
-    };
-    const Surface surfaces[2] = {
-        {bl, br, tl, tr, right, up, {0.80f, 0.80f, 0.82f}, {0.62f, 0.63f, 0.66f}},   // wall
-        {br, bl, nr, nl, right, fwd, {0.58f, 0.52f, 0.45f}, {0.34f, 0.30f, 0.27f}},  // floor
-    };
-    for (const Surface& sf : surfaces) {
-      gridQuad(sf.p00, sf.p10, sf.p01, sf.p11, kGrid, [&](Vec3 a, Vec3 b, Vec3 c) {
+  p.addPass(wall_id, 2 * 2 * Backdrop::kGrid * Backdrop::kGrid, CullMode::Back, [=](Emitter& e) {
+    for (const Backdrop::Checker& sf : bd.surfaces) {
+      gridQuad(sf.p00, sf.p10, sf.p01, sf.p11, Backdrop::kGrid, [&](Vec3 a, Vec3 b, Vec3 c) {
         // Checker coordinates in cells, interpolated perspective-correctly.
         auto cv = [&](Vec3 q) {
-          return clipVertex(vp, q, {dot(q, sf.u_axis) / kCell, dot(q, sf.v_axis) / kCell});
+          return clipVertex(vp, q, {dot(q, sf.u_axis) / Backdrop::kCell, dot(q, sf.v_axis) / Backdrop::kCell});
         };
         e.triangle(cv(a), cv(b), cv(c), 2, [&](const RasterFragment& rf, Fragment& f) {
           const bool odd = (static_cast<int64_t>(std::floor(rf.attr[0])) +
@@ -341,21 +315,12 @@ void addBackdrop(Plan& p) {
   const uint32_t pillar_id = p.addDraw("pillar", DrawClass::Opaque);
   const Vec3 light = p.lightDir();
   p.addPass(pillar_id, 12, CullMode::Back, [=](Emitter& e) {
-    constexpr float kHalf = 0.11f, kTop = 0.85f;
-    const float half_h = (kTop - kFloorY) / 2;
-    const Vec3 centre = right * 0.55f + fwd * 0.15f + Vec3{0, kFloorY + half_h, 0};
-    // Corner k: bit 0 = +right, bit 1 = +up, bit 2 = +fwd; faces share corners exactly.
-    Vec3 corner[8];
-    for (int k = 0; k < 8; ++k)
-      corner[k] = centre + right * ((k & 1) ? kHalf : -kHalf) + up * ((k & 2) ? half_h : -half_h) +
-                  fwd * ((k & 4) ? kHalf : -kHalf);
-    // Counter-clockwise seen from outside: +right, -right, +up, -up, +fwd, -fwd.
-    constexpr int kFaces[6][4] = {{1, 5, 7, 3}, {0, 2, 6, 4}, {2, 3, 7, 6},
-                                  {0, 4, 5, 1}, {4, 6, 7, 5}, {0, 1, 3, 2}};
-    for (const auto& q : kFaces) {
+    const Vec3* corner = bd.pillar;
+    for (const auto& q : Backdrop::kPillarFaces) {
       const Vec3 n = normalize(cross(corner[q[1]] - corner[q[0]], corner[q[3]] - corner[q[0]]));
       const float k = 0.35f + 0.65f * std::max(0.0f, dot(n, light));
-      const std::array<float, 3> col{0.18f * k, 0.42f * k, 0.48f * k};
+      const auto& base = Backdrop::kPillarColour;
+      const std::array<float, 3> col{base[0] * k, base[1] * k, base[2] * k};
       auto shade = [&](const RasterFragment&, Fragment& f) {
         f.r = col[0], f.g = col[1], f.b = col[2], f.a = 1.0f;
       };
