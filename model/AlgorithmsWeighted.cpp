@@ -14,6 +14,14 @@ namespace {
 
 inline bool noContribution(const Fragment& f) { return !(f.a > 0.0f); }
 
+// The weighted sums every algorithm here keeps: (sum w c, sum w).
+inline void accumulate(Rgba& acc, const Fragment& f, float w) {
+  acc.r += w * f.r;
+  acc.g += w * f.g;
+  acc.b += w * f.b;
+  acc.a += w;
+}
+
 // ---------------------------------------------------------------- wsum
 // Accumulates (sum a c, sum a); C = C_bg + sum a c - C_bg sum a, clamped to
 // [0,1] because it leaves that range once sum a > 1.
@@ -27,10 +35,7 @@ class Wsum final : public OitAlgorithm {
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
     Rgba acc = loadAcc(fmt_, w);
-    acc.r += f.a * f.r;
-    acc.g += f.a * f.g;
-    acc.b += f.a * f.b;
-    acc.a += f.a;
+    accumulate(acc, f, f.a);
     storeAcc(fmt_, acc, w);
     return InsertOutcome::Stored;
   }
@@ -61,10 +66,7 @@ class Wavg final : public OitAlgorithm {
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
     Rgba acc = loadAcc(fmt_, w);
-    acc.r += f.a * f.r;
-    acc.g += f.a * f.g;
-    acc.b += f.a * f.b;
-    acc.a += f.a;
+    accumulate(acc, f, f.a);
     storeAcc(fmt_, acc, w);
     if (w[n_at_] < UINT32_MAX) ++w[n_at_];
     return InsertOutcome::Stored;
@@ -121,10 +123,7 @@ class Wboit final : public OitAlgorithm {
     if (noContribution(f)) return InsertOutcome::Discarded;
     const float wa = weight(f);
     Rgba acc = loadAcc(fmt_, w);
-    acc.r += wa * f.r;
-    acc.g += wa * f.g;
-    acc.b += wa * f.b;
-    acc.a += wa;
+    accumulate(acc, f, wa);
     storeAcc(fmt_, acc, w);
     storeR(w, loadR(w) * (1.0f - f.a));
     return InsertOutcome::Stored;
