@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Checks that a speed change of the timing model changed nothing it computes:
+# runs two bench_timing binaries (before / after) on the same traces and
+# configurations and compares every stats section (cycles, stalls, bytes, lock,
+# cache, time series ...) byte for byte; each run also checks its timing image
+# bit for bit against the functional one.
+#
+#   bench/check_identity.sh BEFORE/bench_timing AFTER/bench_timing [--quick]
+#
+# BEFORE is usually built from the parent commit in its own build directory:
+#   git worktree add /tmp/base HEAD~1 && cmake -S /tmp/base -B /tmp/base/build -G Ninja \
+#     && cmake --build /tmp/base/build --target bench_timing
+# --quick: only the small trace (about 1 minute instead of 3).
+set -euo pipefail
+if [ $# -lt 2 ]; then
+  echo "usage: $0 BEFORE_BENCH_TIMING AFTER_BENCH_TIMING [--quick]" >&2
+  exit 2
+fi
+before=$1 after=$2 quick=${3:-}
+for b in "$before" "$after"; do
+  [ -x "$b" ] || { echo "$0: $b is not an executable" >&2; exit 2; }
+done
+export SYSTEMC_DISABLE_COPYRIGHT_MESSAGE=1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+small=(--width 320 --height 240 --quads 2500)
+# name | trace options | model options
+configs=(
+  "defaults|small|"
+  "skips-off|small|--set skip.early_depth=false --set skip.fast_clear=false --set skip.lazy_merge=false --set skip.idle_cycles=false"
+  "dgpu|small|--preset dgpu"
+  "eos-quad-unordered|small|--set lock.release=end_of_shader --set lock.granularity=quad --set lock.ordered=false"
+  "fixed-1part-tile|small|--set input.latency_model=fixed --set partitions.count=1 --set lock.granularity=tile"
+  "abuffer|small|--algo abuffer"
+  "fp32-smallcache|small|--format fp32 --set cache.size_bytes=16384 --set cache.miss_queue=2 --set lock.capacity=64"
+  "adaptive-4part|small|--algo adaptive --format fp32 --set partitions.count=4 --set sim.quantum_cycles=100 --set input.fragments_per_clock=0.5"
+  "wboit-fp16-nohiz|small|--algo wboit --format fp16 --set early_depth.hierarchical=false"
+  "mlab-fp16-k8|small|--format fp16 --k 8"
+  "kbuffer-k2|small|--algo kbuffer --k 2"
+  "hybrid|small|--algo hybrid --k 3"
+  "alpha|small|--algo alpha"
+  "wsum|small|--algo wsum --format fp16"
+  "wavg|small|--algo wavg --format fp32"
+  "slab|small|--algo slab --format fp32"
+  "stochastic|small|--algo stochastic --format fp32"
+  "mlcb|small|--algo mlcb --format fp32"
+  "1part-noidle|small|--set partitions.count=1 --set skip.idle_cycles=false"
+)
+[ "$quick" = --quick ] || configs+=("full-defaults|full|" "full-dgpu|full|--preset dgpu")
+
+fail=0
+for c in "${configs[@]}"; do
+  IFS='|' read -r name trace opts <<<"$c"
+  targs=()
+  [ "$trace" = small ] && targs=("${small[@]}")
+  # shellcheck disable=SC2086  # opts is a list of options
+  for side in before after; do
+    bin=$before
+    [ $side = after ] && bin=$after
+    if ! "$bin" --mode both --reps 1 "${targs[@]}" $opts --stats "$work/$name.$side.json" >"$work/$name.$side.log" 2>&1; then
+      echo "FAIL $name: $side run failed:"; tail -3 "$work/$name.$side.log"; fail=1; continue 2
+    fi
+  done
+  t_before=$(grep -o 'timing:     best [0-9.]* s' "$work/$name.before.log" | awk '{print $3}')
+  t_after=$(grep -o 'timing:     best [0-9.]* s' "$work/$name.after.log" | awk '{print $3}')
+  if cmp -s "$work/$name.before.json" "$work/$name.after.json"; then
+    echo "same  $name (timing ${t_before} s -> ${t_after} s)"
+  else
+    echo "DIFF  $name:"; diff <(tr ',' '\n' <"$work/$name.before.json") <(tr ',' '\n' <"$work/$name.after.json") | head -10
+    fail=1
+  fi
+done
+exit $fail
