@@ -36,6 +36,20 @@ inline void storeRow(StorageFormat f, const LayerRow& r, uint32_t* w) {
 
 inline constexpr LayerRow kEmptyRow{0.0f, 0.0f, 0.0f, 1.0f, kInf};
 
+// encodeHalf(decodeHalf(h)) for both halves of a word, without the float
+// round trip: every finite half code comes back unchanged; an Inf code decodes
+// to +-65504 (re-encoded 0x7BFF / 0xFBFF), a NaN code to 0 (0x0000). encodeHalf
+// never writes Inf / NaN codes, so real states take the early return.
+// test_storage_format checks all 2^16 codes against the codecs.
+inline uint32_t requantizedHalves(uint32_t w) {
+  if ((w & 0x7C00u) != 0x7C00u && (w & 0x7C000000u) != 0x7C000000u) return w;
+  auto one = [](uint32_t h) -> uint32_t {
+    if ((h & 0x7C00u) != 0x7C00u) return h;
+    return (h & 0x3FFu) ? 0u : (h & 0x8000u) | 0x7BFFu;
+  };
+  return one(w & 0xFFFFu) | one(w >> 16) << 16;
+}
+
 // The fragment as a blending-array row: premultiplied colour, T = 1 - a.
 inline LayerRow fragmentRow(const Fragment& f) {
   return {f.a * f.r, f.a * f.g, f.a * f.b, 1.0f - f.a, f.z};

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <type_traits>
 
 #include "model/AlgorithmDetail.hpp"
 
@@ -17,31 +18,71 @@ namespace {
 inline bool noContribution(const Fragment& f) { return !(f.a > 0.0f); }
 
 // Rows sorted front to back, empty rows (z = +inf) at the end.
+//
+// Every insert is MLAB's one-pass bubble (`f.z <= B[i].z`: swap and carry
+// on), done in place. clear and insert keep the rows sorted by z (`<=`;
+// empty rows last; a NaN depth never compares true, so it is never stored),
+// so the bubble is "put the fragment at the first row p with f.z <= z_p,
+// shift rows p.. down one, the last row falls off": the slot is found on the
+// raw z words, only the new row (and a merged last row) goes through the
+// codec. Shifted rows move as raw words because every stored code decodes and
+// re-encodes to itself (all unorm8 codes and every finite half code; checked
+// exhaustively in test_storage_format), so the bits equal those of decoding
+// every row, bubbling and re-encoding (test_layered_inplace checks that
+// reference). The one exception, fp16's Inf / NaN half codes, never comes from
+// encodeHalf; shiftRows still rewrites them as the round trip would.
 class SortedRows : public OitAlgorithm {
  protected:
   SortedRows(const AlgorithmParams& p, unsigned rows) : fmt_(p.format), rw_(rowWords(p.format)), n_(rows) {}
 
-  void loadRows(const uint32_t* w, LayerRow* rows) const {
-    for (unsigned i = 0; i < n_; ++i) rows[i] = loadRow(fmt_, w + i * rw_);
-  }
-  void storeRows(uint32_t* w, const LayerRow* rows, unsigned from) const {
-    for (unsigned i = from; i < n_; ++i) storeRow(fmt_, rows[i], w + i * rw_);
-  }
   void clearRows(uint32_t* w) const {
     for (unsigned i = 0; i < n_; ++i) storeRow(fmt_, kEmptyRow, w + i * rw_);
   }
-  // MLAB's one-pass bubble: returns the row that falls off the end (the
-  // fragment itself, an older row, or an empty row) and sets `first` to the
-  // first changed row (n_ when none changed).
-  LayerRow bubble(LayerRow* rows, LayerRow cur, unsigned& first) const {
-    first = n_;
-    for (unsigned i = 0; i < n_; ++i) {
-      if (cur.z <= rows[i].z) {
-        std::swap(cur, rows[i]);
-        if (first == n_) first = i;
+  // fn(std::integral_constant<StorageFormat, fmt_>{}). The inserts pick their
+  // instantiation for fmt_ once, in the constructor: row size and codec are
+  // compile-time constants, and each format's insert is compiled on its own.
+  template <class Fn>
+  decltype(auto) withFormat(Fn&& fn) const {
+    using enum StorageFormat;
+    if (fmt_ == Fp32) return fn(std::integral_constant<StorageFormat, Fp32>{});
+    if (fmt_ == Rgba8T8Z32) return fn(std::integral_constant<StorageFormat, Rgba8T8Z32>{});
+    return fn(std::integral_constant<StorageFormat, Fp16>{});
+  }
+  // Where the bubble puts a fragment at depth z: the first row with z <= its
+  // depth, n_ when the fragment itself falls off.
+  template <StorageFormat F>
+  unsigned slot(const uint32_t* w, float z) const {
+    constexpr unsigned kRw = rowWords(F);
+    unsigned p = 0;
+    while (p < n_ && !(z <= asFloat(w[p * kRw + kRw - 1]))) ++p;
+    return p;
+  }
+  template <StorageFormat F>
+  static float depth(const uint32_t* w, unsigned row) {
+    return asFloat(w[row * rowWords(F) + rowWords(F) - 1]);
+  }
+  // Rows [from, to) move down one, to [from + 1, to + 1). (memmove pays off
+  // for fp32's 5-word rows, a word loop for the 2- and 3-word ones.)
+  template <StorageFormat F>
+  static void shiftRows(uint32_t* w, unsigned from, unsigned to) {
+    constexpr unsigned kRw = rowWords(F);
+    if constexpr (F == StorageFormat::Fp32) {
+      if (from < to) std::memmove(w + (from + 1) * kRw, w + from * kRw, size_t(to - from) * kRw * sizeof(uint32_t));
+    } else {
+      for (unsigned i = to; i-- > from;) {
+        const uint32_t* s = w + i * kRw;
+        uint32_t* d = w + (i + 1) * kRw;
+        for (unsigned j = 0; j < kRw; ++j) d[j] = (F == StorageFormat::Fp16 && j < 2) ? requantizedHalves(s[j]) : s[j];
       }
     }
-    return cur;
+  }
+  // eq. 7, 8 of the MLAB paper: the nearer row l absorbs the row behind it
+  // and keeps its own Z.
+  static void mergeBehind(LayerRow& l, const LayerRow& out) {
+    l.r += out.r * l.t;
+    l.g += out.g * l.t;
+    l.b += out.b * l.t;
+    l.t *= out.t;
   }
   // Front-to-back composite of the rows (eq. 5/6 of the MLAB paper); returns
   // the remaining transmittance in T.
@@ -66,30 +107,15 @@ class SortedRows : public OitAlgorithm {
 // ---------------------------------------------------------------- mlab
 class Mlab final : public SortedRows {
  public:
-  explicit Mlab(const AlgorithmParams& p) : SortedRows(p, p.layers) {
+  explicit Mlab(const AlgorithmParams& p)
+      : SortedRows(p, p.layers), insert_(withFormat([](auto fmt) { return &Mlab::insertAt<decltype(fmt)::value>; })) {
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "mlab"; }
   void clear(uint32_t* w) override { clearRows(w); }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
-    if (fmt_ == StorageFormat::Fp32) return insertFp32(w, f);
-    LayerRow rows[kMaxLayers];
-    loadRows(w, rows);
-    unsigned first;
-    const LayerRow out = bubble(rows, fragmentRow(f), first);
-    InsertOutcome o = InsertOutcome::Stored;
-    if (out.z != kInf) {  // k + 1 rows: merge the last two (eq. 7, 8; Z of the nearer)
-      LayerRow& l = rows[n_ - 1];
-      l.r += out.r * l.t;
-      l.g += out.g * l.t;
-      l.b += out.b * l.t;
-      l.t *= out.t;
-      first = std::min(first, n_ - 1);
-      o = InsertOutcome::Merged;
-    }
-    storeRows(w, rows, first);
-    return o;
+    return (this->*insert_)(w, f);
   }
   Rgb resolve(const uint32_t* w, Rgb bg) override {
     float r, g, b, T;
@@ -98,60 +124,76 @@ class Mlab final : public SortedRows {
   }
 
  private:
-  // The same insert in place on fp32 rows (raw LayerRow words): the rows are
-  // always sorted by z (`<=`; empty rows, +inf, last), so the bubble is
-  // "insert at the first row with f.z <= z, shift the rest down one, the
-  // last row falls off". Same float operations as the generic path, so the
-  // same bits (bench_functional's checksum and every mlab test unchanged);
-  // it only skips copying all k rows out and back.
-  InsertOutcome insertFp32(uint32_t* w, const Fragment& f) const {
-    constexpr unsigned kRw = 5;
-    unsigned p = 0;
-    while (p < n_ && !(f.z <= asFloat(w[p * kRw + 4]))) ++p;
+  // The bubble in place (see SortedRows). With k + 1 rows the one falling
+  // off merges into the row that ends up last (eq. 7, 8; Z of the nearer).
+  // As in the bubble over decoded rows, the fragment's row takes part
+  // unquantised: it is the row falling off when it lands behind every row,
+  // and the merge target when it lands in the last row.
+  template <StorageFormat F>
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+    constexpr unsigned kRw = rowWords(F);
+    const unsigned p = slot<F>(w, f.z);
     const LayerRow fr = fragmentRow(f);
-    LayerRow out = fr;  // p == n_: the fragment itself falls off
-    if (p < n_) {
-      std::memcpy(&out, w + (n_ - 1) * kRw, sizeof out);
-      std::memmove(w + (p + 1) * kRw, w + p * kRw, size_t(n_ - 1 - p) * kRw * sizeof(uint32_t));
-      std::memcpy(w + p * kRw, &fr, sizeof fr);
+    uint32_t* last = w + (n_ - 1) * kRw;
+    if (p == n_) {  // behind every row
+      if (fr.z == kInf) return InsertOutcome::Stored;  // +inf falls off like an empty row
+      LayerRow l = loadRow(F, last);
+      mergeBehind(l, fr);
+      storeRow(F, l, last);
+      return InsertOutcome::Merged;
     }
-    if (out.z == kInf) return InsertOutcome::Stored;
-    LayerRow l;  // merge into the last row (eq. 7, 8; Z of the nearer)
-    std::memcpy(&l, w + (n_ - 1) * kRw, sizeof l);
-    l.r += out.r * l.t;
-    l.g += out.g * l.t;
-    l.b += out.b * l.t;
-    l.t *= out.t;
-    std::memcpy(w + (n_ - 1) * kRw, &l, sizeof l);
+    if (depth<F>(w, n_ - 1) == kInf) {  // an empty row falls off
+      shiftRows<F>(w, p, n_ - 1);
+      storeRow(F, fr, w + p * kRw);
+      return InsertOutcome::Stored;
+    }
+    const LayerRow out = loadRow(F, last);
+    LayerRow l = p == n_ - 1 ? fr : loadRow(F, last - kRw);  // row n-2 before the shift
+    mergeBehind(l, out);
+    if (p < n_ - 1) {
+      shiftRows<F>(w, p, n_ - 2);
+      storeRow(F, fr, w + p * kRw);
+    }
+    storeRow(F, l, last);
     return InsertOutcome::Merged;
   }
+  InsertOutcome (Mlab::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
 };
 
 // ---------------------------------------------------------------- kbuffer
 class KBuffer final : public SortedRows {
  public:
-  explicit KBuffer(const AlgorithmParams& p) : SortedRows(p, p.layers) {
+  explicit KBuffer(const AlgorithmParams& p)
+      : SortedRows(p, p.layers),
+        insert_(withFormat([](auto fmt) { return &KBuffer::insertAt<decltype(fmt)::value>; })) {
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "kbuffer"; }
   void clear(uint32_t* w) override { clearRows(w); }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
-    LayerRow rows[kMaxLayers];
-    loadRows(w, rows);
-    unsigned first;
-    const LayerRow out = bubble(rows, fragmentRow(f), first);  // the furthest row falls off
-    // The fragment itself was the furthest: nothing changes, nothing written.
-    if (first == n_) return InsertOutcome::Discarded;
-    storeRows(w, rows, first);
-    // Merged: kept, but an older row was evicted to make room.
-    return out.z != kInf ? InsertOutcome::Merged : InsertOutcome::Stored;
+    return (this->*insert_)(w, f);
   }
   Rgb resolve(const uint32_t* w, Rgb bg) override {
     float r, g, b, T;
     composite(w, r, g, b, T);
     return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
   }
+
+ private:
+  // The bubble in place (see SortedRows); the furthest of k + 1 rows is dropped.
+  template <StorageFormat F>
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+    const unsigned p = slot<F>(w, f.z);
+    // The fragment itself was the furthest: nothing changes, nothing written.
+    if (p == n_) return InsertOutcome::Discarded;
+    const bool evicts = depth<F>(w, n_ - 1) != kInf;
+    shiftRows<F>(w, p, n_ - 1);
+    storeRow(F, fragmentRow(f), w + p * rowWords(F));
+    // Merged: kept, but an older row was evicted to make room.
+    return evicts ? InsertOutcome::Merged : InsertOutcome::Stored;
+  }
+  InsertOutcome (KBuffer::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
 };
 
 // ---------------------------------------------------------------- hybrid
@@ -161,7 +203,9 @@ class KBuffer final : public SortedRows {
 class Hybrid final : public SortedRows {
  public:
   explicit Hybrid(const AlgorithmParams& p)
-      : SortedRows(p, p.layers - 1), packed_(p.format != StorageFormat::Fp32) {
+      : SortedRows(p, p.layers - 1),
+        packed_(p.format != StorageFormat::Fp32),
+        insert_(withFormat([](auto fmt) { return &Hybrid::insertAt<decltype(fmt)::value>; })) {
     tail_at_ = n_ * rw_;
     setLayout({n_, p.format, packed_ ? 2u : 5u,
                packed_ ? "packed tail (colour 3x10 bit, alpha_sum fp16, count 16 bit)"
@@ -174,24 +218,7 @@ class Hybrid final : public SortedRows {
   }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
-    LayerRow rows[kMaxLayers];
-    loadRows(w, rows);
-    unsigned first;
-    const LayerRow out = bubble(rows, fragmentRow(f), first);
-    storeRows(w, rows, first);
-    if (out.z == kInf) return InsertOutcome::Stored;
-    // The overflowing row joins the tail (Listing 2; a row whose stored T
-    // rounded to 1 adds nothing, as in the paper).
-    if (out.t != 1.0f) {
-      HybridTail t = loadTail(w + tail_at_);
-      t.r += out.r;
-      t.g += out.g;
-      t.b += out.b;
-      t.alpha_sum += 1.0f - out.t;
-      if (t.count < UINT32_MAX) ++t.count;
-      storeTail(w + tail_at_, t);
-    }
-    return InsertOutcome::Merged;
+    return (this->*insert_)(w, f);
   }
   Rgb resolve(const uint32_t* w, Rgb bg) override {
     float r, g, b, T;
@@ -213,6 +240,34 @@ class Hybrid final : public SortedRows {
   }
 
  private:
+  // The bubble in place over the k - 1 core rows (see SortedRows). The row
+  // falling off is the fragment's unquantised row when it lands behind every
+  // row, else the old last row (z = +inf: empty, nothing to add).
+  template <StorageFormat F>
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+    const unsigned p = slot<F>(w, f.z);
+    const LayerRow fr = fragmentRow(f);
+    LayerRow out = fr;
+    if (p < n_) {
+      out = kEmptyRow;
+      if (depth<F>(w, n_ - 1) != kInf) out = loadRow(F, w + (n_ - 1) * rowWords(F));
+      shiftRows<F>(w, p, n_ - 1);
+      storeRow(F, fr, w + p * rowWords(F));
+    }
+    if (out.z == kInf) return InsertOutcome::Stored;
+    // The overflowing row joins the tail (Listing 2; a row whose stored T
+    // rounded to 1 adds nothing, as in the paper).
+    if (out.t != 1.0f) {
+      HybridTail t = loadTail(w + tail_at_);
+      t.r += out.r;
+      t.g += out.g;
+      t.b += out.b;
+      t.alpha_sum += 1.0f - out.t;
+      if (t.count < UINT32_MAX) ++t.count;
+      storeTail(w + tail_at_, t);
+    }
+    return InsertOutcome::Merged;
+  }
   HybridTail loadTail(const uint32_t* w) const {
     if (packed_) return decodeTail(w);
     return {asFloat(w[0]), asFloat(w[1]), asFloat(w[2]), asFloat(w[3]), w[4]};
@@ -226,6 +281,7 @@ class Hybrid final : public SortedRows {
     w[4] = t.count;
   }
   bool packed_;
+  InsertOutcome (Hybrid::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
   unsigned tail_at_ = 0;
 };
 

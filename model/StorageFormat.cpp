@@ -1,6 +1,5 @@
 #include "model/StorageFormat.hpp"
 
-#include <bit>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,106 +9,21 @@ namespace oit::model {
 namespace {
 
 // v saturated to [0,1] and rounded to an n-bit unorm code. double makes
-// v * maxCode exact (24 + 10 bits < 53), so the +0.5/floor rounding is exact.
+// v * maxCode exact (24 + 10 bits < 53), so the +0.5/floor rounding is exact;
+// the sum is positive there, so the truncating conversion is the floor.
 uint32_t encodeUnorm(double v, uint32_t maxCode) {
   if (!(v > 0.0)) return 0;  // negative, zero and NaN
   if (v >= 1.0) return maxCode;
-  return static_cast<uint32_t>(std::floor(v * maxCode + 0.5));
+  return static_cast<uint32_t>(v * maxCode + 0.5);
 }
 
 }  // namespace
 
-uint8_t encodeUnorm8(float v) { return static_cast<uint8_t>(encodeUnorm(v, 255)); }
-float decodeUnorm8(uint8_t code) { return float(code) / 255.0f; }
-
 uint16_t encodeUnorm10(float v) { return static_cast<uint16_t>(encodeUnorm(v, 1023)); }
 float decodeUnorm10(uint16_t code) { return float(code & 0x3FFu) / 1023.0f; }
 
-uint16_t encodeHalf(float v) {
-  const uint32_t bits = std::bit_cast<uint32_t>(v);
-  const uint16_t sign = static_cast<uint16_t>((bits >> 16) & 0x8000u);
-  const uint32_t abs = bits & 0x7FFFFFFFu;
-  if (abs > 0x7F800000u) return 0;  // NaN
-  // 65520 is the midpoint between 65504 and 2^16; ties-to-even would round it
-  // (and everything above) to Inf, which we saturate instead.
-  if (abs >= 0x477FF000u) return sign | 0x7BFFu;
-  if (abs >= 0x38800000u) {  // >= 2^-14: normal half
-    const uint32_t exp = (abs >> 23) - 127 + 15;
-    const uint32_t mant = abs & 0x7FFFFFu;
-    uint32_t h = (exp << 10) | (mant >> 13);
-    const uint32_t rest = mant & 0x1FFFu;
-    // A carry out of the mantissa correctly bumps the exponent.
-    if (rest > 0x1000u || (rest == 0x1000u && (h & 1u))) ++h;
-    return sign | static_cast<uint16_t>(h);
-  }
-  // 2^-25 is the midpoint between 0 and the smallest subnormal 2^-24; the tie
-  // goes to the even code, 0.
-  if (abs <= 0x33000000u) return sign;
-  // Subnormal half: code = value / 2^-24 = mant24 >> (126 - exp).
-  const uint32_t exp = abs >> 23;  // 102..112 here
-  const uint32_t mant = (abs & 0x7FFFFFu) | 0x800000u;
-  const uint32_t shift = 126 - exp;  // 14..24
-  uint32_t h = mant >> shift;
-  const uint32_t rest = mant & ((1u << shift) - 1u);
-  const uint32_t halfway = 1u << (shift - 1);
-  if (rest > halfway || (rest == halfway && (h & 1u))) ++h;  // may become 2^-14, a normal: fine
-  return sign | static_cast<uint16_t>(h);
-}
-
-float decodeHalf(uint16_t code) {
-  const uint32_t sign = uint32_t(code & 0x8000u) << 16;
-  const uint32_t exp = (code >> 10) & 0x1Fu;
-  const uint32_t mant = code & 0x3FFu;
-  if (exp == 0x1F) {
-    if (mant != 0) return 0.0f;                                 // NaN code
-    return std::bit_cast<float>(sign | 0x477FE000u);            // Inf code -> +-65504
-  }
-  if (exp == 0) {
-    // Subnormal (or zero): mant * 2^-24, exact in binary32.
-    const float mag = float(mant) * 0x1p-24f;
-    return sign ? -mag : mag;
-  }
-  return std::bit_cast<float>(sign | ((exp - 15 + 127) << 23) | (mant << 13));
-}
-
-void encodeRow(StorageFormat f, const LayerRow& row, uint32_t* w) {
-  switch (f) {
-    case StorageFormat::Fp32:
-      w[0] = std::bit_cast<uint32_t>(row.r);
-      w[1] = std::bit_cast<uint32_t>(row.g);
-      w[2] = std::bit_cast<uint32_t>(row.b);
-      w[3] = std::bit_cast<uint32_t>(row.t);
-      w[4] = std::bit_cast<uint32_t>(row.z);
-      return;
-    case StorageFormat::Rgba8T8Z32:
-      w[0] = uint32_t(encodeUnorm8(row.r)) | uint32_t(encodeUnorm8(row.g)) << 8 |
-             uint32_t(encodeUnorm8(row.b)) << 16 | uint32_t(encodeUnorm8(row.t)) << 24;
-      w[1] = std::bit_cast<uint32_t>(row.z);
-      return;
-    case StorageFormat::Fp16:
-      w[0] = uint32_t(encodeHalf(row.r)) | uint32_t(encodeHalf(row.g)) << 16;
-      w[1] = uint32_t(encodeHalf(row.b)) | uint32_t(encodeHalf(row.t)) << 16;
-      w[2] = std::bit_cast<uint32_t>(row.z);
-      return;
-  }
-  throw std::invalid_argument("encodeRow: unknown storage format");
-}
-
-LayerRow decodeRow(StorageFormat f, const uint32_t* w) {
-  switch (f) {
-    case StorageFormat::Fp32:
-      return {std::bit_cast<float>(w[0]), std::bit_cast<float>(w[1]), std::bit_cast<float>(w[2]),
-              std::bit_cast<float>(w[3]), std::bit_cast<float>(w[4])};
-    case StorageFormat::Rgba8T8Z32:
-      return {decodeUnorm8(uint8_t(w[0])), decodeUnorm8(uint8_t(w[0] >> 8)),
-              decodeUnorm8(uint8_t(w[0] >> 16)), decodeUnorm8(uint8_t(w[0] >> 24)),
-              std::bit_cast<float>(w[1])};
-    case StorageFormat::Fp16:
-      return {decodeHalf(uint16_t(w[0])), decodeHalf(uint16_t(w[0] >> 16)),
-              decodeHalf(uint16_t(w[1])), decodeHalf(uint16_t(w[1] >> 16)),
-              std::bit_cast<float>(w[2])};
-  }
-  throw std::invalid_argument("decodeRow: unknown storage format");
+void unknownStorageFormat(const char* where) {
+  throw std::invalid_argument(std::string(where) + ": unknown storage format");
 }
 
 LayerRow quantizeRow(StorageFormat f, const LayerRow& row) {

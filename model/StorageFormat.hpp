@@ -4,6 +4,8 @@
 // (no dependence on the FPU rounding mode or build flags).
 #pragma once
 
+#include <array>
+#include <bit>
 #include <cstdint>
 #include <string_view>
 
@@ -34,9 +36,11 @@ constexpr unsigned rowWords(StorageFormat f) {
 constexpr unsigned rowBytes(StorageFormat f) { return 4u * rowWords(f); }
 
 // words must hold rowWords(f) elements. Depth is always stored as its raw
-// binary32 bits (bit-exact, including +inf, -0 and denormals).
-void encodeRow(StorageFormat f, const LayerRow& row, uint32_t* words);
-LayerRow decodeRow(StorageFormat f, const uint32_t* words);
+// binary32 bits (bit-exact, including +inf, -0 and denormals). Inline,
+// defined after the scalar codecs: the blending-array inserts call them with
+// a constant format, so each call reduces to that format's fields.
+inline void encodeRow(StorageFormat f, const LayerRow& row, uint32_t* words);
+inline LayerRow decodeRow(StorageFormat f, const uint32_t* words);
 // decodeRow(f, encodeRow(f, row)): what a row becomes after one store.
 LayerRow quantizeRow(StorageFormat f, const LayerRow& row);
 
@@ -46,18 +50,115 @@ StorageFormat parseStorageFormat(std::string_view name);
 const char* toString(StorageFormat f);
 
 // --- scalar codecs -------------------------------------------------------
+// unorm8 and binary16 are inline: the row codecs call them per channel.
 // unorm8: code = floor(v * 255 + 0.5) after saturating v to [0,1]; NaN -> 0.
-uint8_t encodeUnorm8(float v);
-float decodeUnorm8(uint8_t code);  // code / 255, correctly rounded
+// double makes v * 255 exact (24 + 8 bits); the saturated sum is >= 0.5, so
+// the truncating conversion is the floor.
+inline uint8_t encodeUnorm8(float v) {
+  const float s = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f;  // NaN fails v > 0
+  return static_cast<uint8_t>(double(s) * 255.0 + 0.5);
+}
+// code / 255, correctly rounded: the 256 quotients, so a decode is one load.
+inline constexpr std::array<float, 256> kUnorm8Values = [] {
+  std::array<float, 256> t{};
+  for (unsigned c = 0; c < 256; ++c) t[c] = float(c) / 255.0f;
+  return t;
+}();
+inline float decodeUnorm8(uint8_t code) { return kUnorm8Values[code]; }
 // IEEE binary16, round to nearest even. Overflow (|v| >= 65520, including
 // +-inf) saturates to +-65504, never Inf; NaN -> +0. -0 stays -0.
-uint16_t encodeHalf(float v);
+inline uint16_t encodeHalf(float v) {
+  const uint32_t bits = std::bit_cast<uint32_t>(v);
+  const uint16_t sign = static_cast<uint16_t>((bits >> 16) & 0x8000u);
+  const uint32_t abs = bits & 0x7FFFFFFFu;
+  if (abs > 0x7F800000u) return 0;  // NaN
+  // 65520 is the midpoint between 65504 and 2^16; ties-to-even would round it
+  // (and everything above) to Inf, which we saturate instead.
+  if (abs >= 0x477FF000u) return sign | 0x7BFFu;
+  if (abs >= 0x38800000u) {  // >= 2^-14: normal half
+    // Re-bias the exponent (127 -> 15) and drop 13 mantissa bits, rounding to
+    // nearest even without a branch: adding 0xFFF plus the kept lowest bit
+    // carries exactly when the dropped bits exceed 0x1000 or equal it with an
+    // odd kept bit. A carry out of the mantissa correctly bumps the exponent.
+    return sign | static_cast<uint16_t>((abs - ((127u - 15u) << 23) + 0xFFFu + ((abs >> 13) & 1u)) >> 13);
+  }
+  // 2^-25 is the midpoint between 0 and the smallest subnormal 2^-24; the tie
+  // goes to the even code, 0.
+  if (abs <= 0x33000000u) return sign;
+  // Subnormal half: code = value / 2^-24 = mant24 >> (126 - exp).
+  const uint32_t exp = abs >> 23;  // 102..112 here
+  const uint32_t mant = (abs & 0x7FFFFFu) | 0x800000u;
+  const uint32_t shift = 126 - exp;  // 14..24
+  uint32_t h = mant >> shift;
+  const uint32_t rest = mant & ((1u << shift) - 1u);
+  const uint32_t halfway = 1u << (shift - 1);
+  if (rest > halfway || (rest == halfway && (h & 1u))) ++h;  // may become 2^-14, a normal: fine
+  return sign | static_cast<uint16_t>(h);
+}
 // Exact for finite codes; the Inf codes decode to +-65504 and NaN codes to 0,
 // so foreign data can never inject a non-finite value.
-float decodeHalf(uint16_t code);
+inline float decodeHalf(uint16_t code) {
+  const uint32_t sign = uint32_t(code & 0x8000u) << 16;
+  const uint32_t exp = (code >> 10) & 0x1Fu;
+  const uint32_t mant = code & 0x3FFu;
+  if (exp == 0x1F) {
+    if (mant != 0) return 0.0f;                                 // NaN code
+    return std::bit_cast<float>(sign | 0x477FE000u);            // Inf code -> +-65504
+  }
+  if (exp == 0) {
+    // Subnormal (or zero): mant * 2^-24, exact in binary32.
+    const float mag = float(mant) * 0x1p-24f;
+    return sign ? -mag : mag;
+  }
+  return std::bit_cast<float>(sign | ((exp - 15 + 127) << 23) | (mant << 13));
+}
 // unorm10 (used by the hybrid tail): floor(v * 1023 + 0.5) after saturating to [0,1]; NaN -> 0.
 uint16_t encodeUnorm10(float v);
 float decodeUnorm10(uint16_t code);  // code / 1023, correctly rounded; only the low 10 bits are read
+
+// --- row codecs -----------------------------------------------------------
+// Throws std::invalid_argument naming `where` (a format value outside the enum).
+[[noreturn]] void unknownStorageFormat(const char* where);
+
+inline void encodeRow(StorageFormat f, const LayerRow& row, uint32_t* w) {
+  switch (f) {
+    case StorageFormat::Fp32:
+      w[0] = std::bit_cast<uint32_t>(row.r);
+      w[1] = std::bit_cast<uint32_t>(row.g);
+      w[2] = std::bit_cast<uint32_t>(row.b);
+      w[3] = std::bit_cast<uint32_t>(row.t);
+      w[4] = std::bit_cast<uint32_t>(row.z);
+      return;
+    case StorageFormat::Rgba8T8Z32:
+      w[0] = uint32_t(encodeUnorm8(row.r)) | uint32_t(encodeUnorm8(row.g)) << 8 |
+             uint32_t(encodeUnorm8(row.b)) << 16 | uint32_t(encodeUnorm8(row.t)) << 24;
+      w[1] = std::bit_cast<uint32_t>(row.z);
+      return;
+    case StorageFormat::Fp16:
+      w[0] = uint32_t(encodeHalf(row.r)) | uint32_t(encodeHalf(row.g)) << 16;
+      w[1] = uint32_t(encodeHalf(row.b)) | uint32_t(encodeHalf(row.t)) << 16;
+      w[2] = std::bit_cast<uint32_t>(row.z);
+      return;
+  }
+  unknownStorageFormat("encodeRow");
+}
+
+inline LayerRow decodeRow(StorageFormat f, const uint32_t* w) {
+  switch (f) {
+    case StorageFormat::Fp32:
+      return {std::bit_cast<float>(w[0]), std::bit_cast<float>(w[1]), std::bit_cast<float>(w[2]),
+              std::bit_cast<float>(w[3]), std::bit_cast<float>(w[4])};
+    case StorageFormat::Rgba8T8Z32:
+      return {decodeUnorm8(uint8_t(w[0])), decodeUnorm8(uint8_t(w[0] >> 8)),
+              decodeUnorm8(uint8_t(w[0] >> 16)), decodeUnorm8(uint8_t(w[0] >> 24)),
+              std::bit_cast<float>(w[1])};
+    case StorageFormat::Fp16:
+      return {decodeHalf(uint16_t(w[0])), decodeHalf(uint16_t(w[0] >> 16)),
+              decodeHalf(uint16_t(w[1])), decodeHalf(uint16_t(w[1] >> 16)),
+              std::bit_cast<float>(w[2])};
+  }
+  unknownStorageFormat("decodeRow");
+}
 
 // --- hybrid transparency's packed 8-byte tail (MLAB paper, Sec. 4.2) ------
 // Holds the running sums of the one-pass HT tail. The 30 colour bits store

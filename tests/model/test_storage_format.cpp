@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "model/AlgorithmDetail.hpp"  // requantizedHalves
 #include "model/StorageFormat.hpp"
 
 using namespace oit::model;
@@ -114,6 +115,79 @@ TEST(StorageFormat, Unorm8Saturation) {
   EXPECT_EQ(encodeUnorm8(kNaN), 0);
   EXPECT_EQ(encodeUnorm8(-kNaN), 0);
   EXPECT_EQ(encodeUnorm8(std::numeric_limits<float>::denorm_min()), 0);
+}
+
+TEST(StorageFormat, Unorm8DecodeTableIsTheQuotient) {
+  volatile float d255 = 255.0f;  // a run-time division, not the compiler's constant folding
+  for (unsigned c = 0; c < 256; ++c)
+    ASSERT_EQ(bits(decodeUnorm8(uint8_t(c))), bits(float(c) / d255)) << c;
+}
+
+TEST(StorageFormat, UnormEncodeEqualsFloorFormulaSampled) {
+  // The codecs truncate instead of calling floor (the saturated sum is >= 0.5).
+  // This was checked over all 2^32 float bit patterns once; here a strided
+  // sample of every exponent and sign plus the neighbours of each threshold.
+  auto floor8 = [](float v) -> unsigned {
+    if (!(v > 0.0f)) return 0;
+    if (v >= 1.0f) return 255;
+    return unsigned(std::floor(double(v) * 255.0 + 0.5));
+  };
+  auto floor10 = [](float v) -> unsigned {
+    if (!(v > 0.0f)) return 0;
+    if (v >= 1.0f) return 1023;
+    return unsigned(std::floor(double(v) * 1023.0 + 0.5));
+  };
+  for (uint64_t u = 0; u < (uint64_t(1) << 32); u += 4099) {
+    const float v = fromBits(uint32_t(u));
+    ASSERT_EQ(encodeUnorm8(v), floor8(v)) << std::hex << u;
+    ASSERT_EQ(encodeUnorm10(v), floor10(v)) << std::hex << u;
+  }
+  for (unsigned k = 0; k < 1023; ++k) {
+    float v = float((k + 0.5) / 1023.0);
+    for (int i = 0; i < 4; ++i) v = std::nextafter(v, 0.0f);
+    for (int i = 0; i < 9; ++i, v = std::nextafter(v, 2.0f)) ASSERT_EQ(encodeUnorm10(v), floor10(v)) << v;
+  }
+  for (unsigned k = 0; k < 255; ++k) {
+    float v = float((k + 0.5) / 255.0);
+    for (int i = 0; i < 4; ++i) v = std::nextafter(v, 0.0f);
+    for (int i = 0; i < 9; ++i, v = std::nextafter(v, 2.0f)) ASSERT_EQ(encodeUnorm8(v), floor8(v)) << v;
+  }
+  for (float v : {1.0f, std::nextafter(1.0f, 0.0f), fromBits(1), 0.5f / 255.0f, kInf, -kInf, kNaN, -0.0f})
+    EXPECT_EQ(encodeUnorm8(v), floor8(v)) << v;
+}
+
+TEST(StorageFormat, StoredRowWordsReencodeToThemselves) {
+  // mlab / kbuffer / hybrid shift stored rows as raw words instead of
+  // decode + encode; that is exact because every code round-trips: all 2^32
+  // rgba8t8z32 colour words (one byte per channel, so each byte's 256 codes
+  // are enough) and every fp16 word without an Inf / NaN half.
+  for (unsigned c = 0; c < 256; ++c) {
+    for (unsigned lane = 0; lane < 4; ++lane) {
+      const uint32_t w[2] = {c << (8 * lane) | (0x5Au << (8 * ((lane + 1) % 4))), 0x3F000000u};
+      uint32_t back[2];
+      encodeRow(StorageFormat::Rgba8T8Z32, decodeRow(StorageFormat::Rgba8T8Z32, w), back);
+      ASSERT_EQ(back[0], w[0]) << c << " lane " << lane;
+      ASSERT_EQ(back[1], w[1]);
+    }
+  }
+  for (uint32_t h = 0; h < 65536; ++h) {
+    for (uint32_t other : {0x0000u, 0x8000u, 0x3C00u, 0x7BFFu}) {
+      const uint32_t w[3] = {h | other << 16, other | h << 16, 0x80000001u};
+      uint32_t back[3];
+      encodeRow(StorageFormat::Fp16, decodeRow(StorageFormat::Fp16, w), back);
+      // The in-place shift's rewrite equals the codec round trip for every code.
+      ASSERT_EQ(oit::model::detail::requantizedHalves(w[0]), back[0]) << std::hex << h;
+      ASSERT_EQ(oit::model::detail::requantizedHalves(w[1]), back[1]) << std::hex << h;
+      ASSERT_EQ(back[2], w[2]);
+      if ((h & 0x7C00u) != 0x7C00u) {
+        ASSERT_EQ(back[0], w[0]) << std::hex << h;
+        ASSERT_EQ(back[1], w[1]) << std::hex << h;
+      }
+    }
+  }
+  // -0, the smallest and largest subnormals and the saturated codes by name.
+  for (uint16_t h : {0x8000, 0x0001, 0x8001, 0x03FF, 0x83FF, 0x0400, 0x7BFF, 0xFBFF})
+    EXPECT_EQ(encodeHalf(decodeHalf(h)), h) << std::hex << h;
 }
 
 TEST(StorageFormat, HalfAllCodesRoundTrip) {
