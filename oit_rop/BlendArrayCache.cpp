@@ -21,74 +21,73 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, ui
   const uint64_t sets = lines / ways_;  // a remainder of lines that cannot form a full set is dropped
   if (sets > UINT32_MAX) throw std::invalid_argument("BlendArrayCache: too many sets");
   sets_ = static_cast<uint32_t>(sets);
+  if (uint64_t(sets_) * ways_ >= kInvalid) throw std::invalid_argument("BlendArrayCache: too many lines");
   lines_.assign(size_t(sets_) * ways_, Line{});
+  line_of_.assign(tiles, kInvalid);
   touched_.assign(tiles, 0);
   miss_queue_.assign(cfg.miss_queue, 0);
 }
 
-BlendArrayCache::Line* BlendArrayCache::find(uint32_t tile) {
-  Line* set = &lines_[size_t(tile % sets_) * ways_];
-  for (uint32_t w = 0; w < ways_; ++w)
-    if (set[w].tile == tile) return &set[w];
-  return nullptr;
-}
-
-const BlendArrayCache::Line* BlendArrayCache::find(uint32_t tile) const {
-  return const_cast<BlendArrayCache*>(this)->find(tile);
-}
-
 Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
   if (tile >= tiles_) throw std::out_of_range("BlendArrayCache::acquire: tile out of range");
+  const uint32_t index = line_of_[tile];
+  if (index == kInvalid) return miss(now, tile, write);
+
+  Line& line = lines_[index];
+  ++stats_.accesses;
+  ++stats_.hits;
+  line.stamp = ++stamp_;
+  if (write) {
+    line.dirty = true;
+    touched_[tile] = 1;
+  }
   const Cycle hit_ready = now + cfg_.hit_latency;
-
-  if (Line* line = find(tile)) {
-    ++stats_.accesses;
-    ++stats_.hits;
-    line->stamp = ++stamp_;
-    if (write) {
-      line->dirty = true;
-      touched_[tile] = 1;
-    }
-    if (line->ready > hit_ready) {
-      ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
-      return line->ready;
-    }
-    return hit_ready;
+  if (line.ready > hit_ready) {
+    ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
+    return line.ready;
   }
+  return hit_ready;
+}
 
-  // Miss: it needs a free miss-queue entry (one whose line is available by now).
-  uint32_t slot = cfg_.miss_queue;
+// Out of line: keeps the frequent hit path of acquire() small.
+Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
+  // A free miss-queue entry is needed (one whose line is available by now): the
+  // first free one. When every entry is free (no miss in flight) that is entry 0.
+  const uint32_t entries = cfg_.miss_queue;
+  uint32_t slot = 0;
   uint32_t in_flight = 0;
-  for (uint32_t i = 0; i < cfg_.miss_queue; ++i) {
-    if (miss_queue_[i] > now)
-      ++in_flight;
-    else if (slot == cfg_.miss_queue)
-      slot = i;
-  }
-  if (slot == cfg_.miss_queue) {
-    ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
-    return kNever;
+  if (miss_queue_max_ > now) {
+    slot = entries;
+    for (uint32_t i = entries; i-- > 0;) {  // backwards: the last free one seen is the first
+      const bool busy = miss_queue_[i] > now;
+      in_flight += busy;
+      if (!busy) slot = i;
+    }
+    if (slot == entries) {
+      ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
+      return kNever;
+    }
   }
   ++stats_.accesses;
   ++stats_.misses;
 
-  // Victim: the first invalid way, else the least recently used.
-  Line* set = &lines_[size_t(tile % sets_) * ways_];
-  Line* victim = &set[0];
-  for (uint32_t w = 0; w < ways_; ++w) {
-    if (set[w].tile == kInvalid) {
-      victim = &set[w];
-      break;
-    }
-    if (set[w].stamp < victim->stamp) victim = &set[w];
-  }
+  // Victim: the first invalid way, else the least recently used. Invalid lines
+  // have stamp 0 and valid ones distinct stamps >= 1, so this is the first way
+  // with the smallest stamp.
+  const size_t first = size_t(tile % sets_) * ways_;
+  size_t victim_index = first;
+  for (size_t i = first + 1; i < first + ways_; ++i)
+    if (lines_[i].stamp < lines_[victim_index].stamp) victim_index = i;
+  Line& victim = lines_[victim_index];
 
+  const Cycle hit_ready = now + cfg_.hit_latency;
   Cycle ready = hit_ready;
-  if (victim->tile != kInvalid) {
+  if (victim.tile != kInvalid) {
     ++stats_.evictions;
-    if (victim->dirty) {
+    line_of_[victim.tile] = kInvalid;
+    if (victim.dirty) {
       ++stats_.writebacks;
-      ready = std::max(ready, memory_.access(now, lineAddress(victim->tile), line_bytes_, true, Surface::BlendArrays));
+      ready = std::max(ready, memory_.access(now, lineAddress(victim.tile), line_bytes_, true, Surface::BlendArrays));
     }
   }
   if (fast_clear_ && !touched_[tile]) {
@@ -97,19 +96,21 @@ Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
     ready = std::max(ready, memory_.access(now, lineAddress(tile), line_bytes_, false, Surface::BlendArrays));
   }
 
-  victim->tile = tile;
-  victim->dirty = write;
-  victim->stamp = ++stamp_;
-  victim->ready = ready;
+  victim.tile = tile;
+  victim.dirty = write;
+  victim.stamp = ++stamp_;
+  victim.ready = ready;
+  line_of_[tile] = static_cast<uint32_t>(victim_index);
   if (write) touched_[tile] = 1;
 
   miss_queue_[slot] = ready;
+  miss_queue_max_ = std::max(miss_queue_max_, ready);
   stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, in_flight + (ready > now ? 1u : 0u));
   return ready;
 }
 
 bool BlendArrayCache::touched(uint32_t tile) const { return tile < tiles_ && touched_[tile]; }
-bool BlendArrayCache::resident(uint32_t tile) const { return tile < tiles_ && find(tile) != nullptr; }
+bool BlendArrayCache::resident(uint32_t tile) const { return tile < tiles_ && line_of_[tile] != kInvalid; }
 uint32_t BlendArrayCache::lineBytes() const { return line_bytes_; }
 uint32_t BlendArrayCache::lines() const { return static_cast<uint32_t>(lines_.size()); }
 uint32_t BlendArrayCache::ways() const { return ways_; }

@@ -61,11 +61,10 @@ class BlendArrayCache {
   struct Line {
     uint32_t tile = kInvalid;
     bool dirty = false;
-    uint64_t stamp = 0;  // LRU: larger = more recently used
+    uint64_t stamp = 0;  // LRU: larger = more recently used; 0 only while invalid
     Cycle ready = 0;     // cycle the line's data is available
   };
-  Line* find(uint32_t tile);
-  const Line* find(uint32_t tile) const;
+  Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident
 
   CacheConfig cfg_;
   uint32_t line_bytes_;
@@ -76,7 +75,13 @@ class BlendArrayCache {
   uint32_t ways_ = 1, sets_ = 1;
   std::vector<Line> lines_;      // set-major: set * ways + way
   std::vector<uint8_t> touched_; // per tile: written this frame
+  // Per tile: index in lines_ of the line holding it, kInvalid if none. The
+  // same answer as searching the tile's set for its tag, without the search.
+  std::vector<uint32_t> line_of_;
   std::vector<Cycle> miss_queue_;  // per entry: cycle it frees (<= now: free)
+  // The largest miss_queue_ entry, exact: an entry is only ever overwritten by a
+  // later cycle (it is free, <= now, and the new one is >= now).
+  Cycle miss_queue_max_ = 0;
   uint64_t stamp_ = 0;
   CacheStats stats_;
 };

@@ -41,6 +41,7 @@ uint64_t MemoryStats::writeBytes() const {
 
 void MemorySystem::Divisor::set(uint64_t v) {
   d = v;
+  mask = v - 1;
   shift = -1;
   if (v != 0 && (v & (v - 1)) == 0) {
     shift = 0;
@@ -70,11 +71,15 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   burst_ticks_ = cyclesToTicks(cfg.burst_bytes / bytesPerCyclePerChannel(), kTickShift);
   require(burst_ticks_ >= 1, "bandwidth too high for the tick resolution");
 
-  burst_div_.set(cfg.burst_bytes);
-  interleave_div_.set(cfg.interleave_bytes);
-  channel_div_.set(cfg.channels);
-  row_div_.set(cfg.row_bytes);
-  bank_div_.set(cfg.banks);
+  map_.burst.set(cfg.burst_bytes);
+  map_.interleave.set(cfg.interleave_bytes);
+  map_.channel.set(cfg.channels);
+  map_.row.set(cfg.row_bytes);
+  map_.bank.set(cfg.banks);
+  map_.interleave_bytes = cfg.interleave_bytes;
+  map_.row_bytes = cfg.row_bytes;
+  map_.multi_channel = cfg.channels > 1;
+  map_.pow2 = map_.interleave.shift >= 0 && map_.channel.shift >= 0 && map_.row.shift >= 0 && map_.bank.shift >= 0;
 
   bus_free_.assign(cfg.channels, 0);
   busy_ticks_.assign(cfg.channels, 0);
@@ -97,14 +102,40 @@ double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
-MemorySystem::Location MemorySystem::locate(uint64_t addr) const {
+// Inline: access() calls it once per run of bursts.
+inline MemorySystem::Run MemorySystem::AddressMap::locateRun(uint64_t addr) const {
   // addr = [row | bank | column-high | channel | column-low(interleave)]
-  const uint64_t chunk = interleave_div_.div(addr);
-  const uint64_t local = channel_div_.div(chunk) * cfg_.interleave_bytes + interleave_div_.mod(addr);
-  const uint64_t row_line = row_div_.div(local);
-  return Location{static_cast<unsigned>(channel_div_.mod(chunk)), static_cast<unsigned>(bank_div_.mod(row_line)),
-                  bank_div_.div(row_line)};
+  uint64_t chunk, in_chunk, local, in_row, row_line, ch, bk, rw;
+  if (pow2) {
+    // The presets: shifts and masks only.
+    chunk = addr >> interleave.shift;
+    in_chunk = addr & interleave.mask;
+    local = ((chunk >> channel.shift) << interleave.shift) + in_chunk;
+    row_line = local >> row.shift;
+    in_row = local & row.mask;
+    ch = chunk & channel.mask;
+    bk = row_line & bank.mask;
+    rw = row_line >> bank.shift;
+  } else {
+    chunk = interleave.div(addr);
+    in_chunk = interleave.mod(addr);
+    local = channel.div(chunk) * interleave_bytes + in_chunk;
+    row_line = row.div(local);
+    in_row = row.mod(local);
+    ch = channel.mod(chunk);
+    bk = bank.mod(row_line);
+    rw = bank.div(row_line);
+  }
+  // The location changes where the local address enters the next row, or where
+  // the next chunk goes to another channel; with one channel the local address
+  // is the address itself and only rows split it. Both distances are whole
+  // bursts (interleave and row sizes are multiples of the burst, addr is aligned).
+  uint64_t span = row_bytes - in_row;
+  if (multi_channel) span = std::min(span, interleave_bytes - in_chunk);
+  return Run{Location{static_cast<unsigned>(ch), static_cast<unsigned>(bk), rw}, burst.div(span)};
 }
+
+MemorySystem::Location MemorySystem::locate(uint64_t addr) const { return map_.locateRun(addr).loc; }
 
 unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).channel; }
 unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
@@ -113,6 +144,31 @@ uint64_t MemorySystem::rowOf(uint64_t addr) const { return locate(addr).row; }
 void MemorySystem::setSampleInterval(Cycle interval_cycles) {
   sample_interval_ = interval_cycles;
   bucket_begin_ = kNoBucket;  // the next burst computes its bucket
+}
+
+void MemorySystem::sampleBursts(uint64_t xfer, uint64_t n, uint64_t step) {
+  // access() handles a run that starts wholly in the current bucket itself.
+  for (;;) {
+    // Bursts come in bus order per channel, so the last bucket usually
+    // matches: skip the division then.
+    const Cycle c = xfer >> kTickShift;
+    if (c < bucket_begin_ || c - bucket_begin_ >= sample_interval_) {
+      last_bucket_ = size_t(c / sample_interval_);
+      bucket_begin_ = Cycle(last_bucket_) * sample_interval_;
+      if (last_bucket_ >= stats_.bus_bytes_per_interval.size())
+        stats_.bus_bytes_per_interval.resize(last_bucket_ + 1, 0);
+    }
+    // Start cycles grow along the run: if the last burst lands in this bucket,
+    // so do all before it (the usual case); else book one and look again.
+    const Cycle last = (xfer + (n - 1) * step) >> kTickShift;
+    if (last - bucket_begin_ < sample_interval_) {
+      stats_.bus_bytes_per_interval[last_bucket_] += n * cfg_.burst_bytes;
+      return;
+    }
+    stats_.bus_bytes_per_interval[last_bucket_] += cfg_.burst_bytes;
+    xfer += step;
+    --n;
+  }
 }
 
 Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
@@ -125,53 +181,78 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   ++stats_.requests;
 
+  // Local copies: the stores below could alias members, locals stay in registers.
+  const AddressMap map = map_;
+  const bool open_row = cfg_.open_row;
+  const unsigned banks = cfg_.banks;
+  const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, burst = burst_ticks_;
+  // Ticks between the bus starts of consecutive bursts of one run (see below).
+  const uint64_t step = open_row ? burst : trp + trcd + cl + burst;
+  uint64_t* const bus_free = bus_free_.data();
+  uint64_t* const busy_ticks = busy_ticks_.data();
+  Cycle* const channel_busy = stats_.channel_busy.data();
+  Bank* const bank_state = banks_.data();
+  uint64_t hits = 0, misses = 0;
+
   const uint64_t arrive = (uint64_t(now) << kTickShift) + ctrl_ticks_;
   uint64_t done = arrive;
-  const uint64_t first = burst_div_.div(addr);
-  const uint64_t last = burst_div_.div(addr + bytes - 1);
-  for (uint64_t b = first; b <= last; ++b) {
-    const Location loc = locate(b * cfg_.burst_bytes);
-    Bank& bank = banks_[size_t(loc.channel) * cfg_.banks + loc.bank];
-    uint64_t column;  // tick the column command (read or write) issues
-    if (cfg_.open_row) {
-      if (bank.open_row == loc.row) {
-        ++stats_.row_hits;
+  const uint64_t first = map.burst.div(addr);
+  const uint64_t last = map.burst.div(addr + bytes - 1);
+  // Books the bursts in address order, a run of bursts with one channel, bank
+  // and row at a time. Per burst the formulas of MEMORY.md apply; inside a run
+  // they reduce to a closed form, which gives the same times:
+  // - open row: the first burst hits or opens the row; the others hit it and
+  //   their column command issues at the same tick (row_ready, >= arrive, does
+  //   not change), so each waits only for the bus, i.e. the previous burst's end;
+  // - closed row: each further burst activates after the previous one's data
+  //   and precharge (act_ready = its end + tRP > arrive; a bank's last_end never
+  //   exceeds its channel's bus_free, so last_end is that end), so its data
+  //   comes after the bus is free: start = previous end + tRP + tRCD + CL.
+  for (uint64_t b = first; b <= last;) {
+    const Run run = map.locateRun(b * map.burst.d);
+    const unsigned ch = run.loc.channel;
+    const uint64_t n = std::min(run.bursts, last - b + 1);
+    b += n;
+    Bank& bank = bank_state[size_t(ch) * banks + run.loc.bank];
+    uint64_t column;  // tick the run's first column command (read or write) issues
+    if (open_row) {
+      if (bank.open_row == run.loc.row) {
+        ++hits;
         column = std::max(arrive, bank.row_ready);
       } else {
-        ++stats_.row_misses;
+        ++misses;
         // Precharge may start once the open row is active and its transfers ended.
         uint64_t start = std::max({arrive, bank.row_ready, bank.last_end});
-        if (bank.open_row != kNoRow) start += trp_ticks_;
-        bank.open_row = loc.row;
-        bank.row_ready = start + trcd_ticks_;
+        if (bank.open_row != kNoRow) start += trp;
+        bank.open_row = run.loc.row;
+        bank.row_ready = start + trcd;
         column = bank.row_ready;
       }
+      hits += n - 1;
     } else {
-      ++stats_.row_misses;  // every access activates its row
-      column = std::max(arrive, bank.act_ready) + trcd_ticks_;
+      misses += n;  // every access activates its row
+      column = std::max(arrive, bank.act_ready) + trcd;
     }
-    uint64_t& bus = bus_free_[loc.channel];
-    const uint64_t xfer = std::max(column + cl_ticks_, bus);
-    const uint64_t end = xfer + burst_ticks_;
-    bus = end;
+    const uint64_t xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
+    const uint64_t last_xfer = xfer + (n - 1) * step;
+    const uint64_t end = last_xfer + burst;
+    bus_free[ch] = end;
     if (sample_interval_) {
-      // Bursts come in bus order per channel, so the last bucket usually
-      // matches: skip the division then.
-      const Cycle c = xfer >> kTickShift;
-      if (c < bucket_begin_ || c - bucket_begin_ >= sample_interval_) {
-        last_bucket_ = size_t(c / sample_interval_);
-        bucket_begin_ = Cycle(last_bucket_) * sample_interval_;
-        if (last_bucket_ >= stats_.bus_bytes_per_interval.size())
-          stats_.bus_bytes_per_interval.resize(last_bucket_ + 1, 0);
-      }
-      stats_.bus_bytes_per_interval[last_bucket_] += cfg_.burst_bytes;
+      // Usually the whole run starts in the bucket of the previous one.
+      const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
+      if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_)
+        stats_.bus_bytes_per_interval[last_bucket_] += n * map.burst.d;
+      else
+        sampleBursts(xfer, n, step);
     }
     bank.last_end = std::max(bank.last_end, end);
-    if (!cfg_.open_row) bank.act_ready = bank.last_end + trp_ticks_;  // auto-precharge after the data
-    busy_ticks_[loc.channel] += burst_ticks_;
-    stats_.channel_busy[loc.channel] = (busy_ticks_[loc.channel] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
+    if (!open_row) bank.act_ready = bank.last_end + trp;  // auto-precharge after the data
+    busy_ticks[ch] += n * burst;
+    channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
     done = std::max(done, end);
   }
+  stats_.row_hits += hits;
+  stats_.row_misses += misses;
   const Cycle completion = (done + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
   stats_.last_completion = std::max(stats_.last_completion, completion);
   return completion;

@@ -74,10 +74,11 @@ class MemorySystem {
   // Division by a configuration constant; a shift/mask when it is a power of two.
   struct Divisor {
     uint64_t d = 1;
-    int shift = 0;  // -1: not a power of two
+    uint64_t mask = 0;  // d - 1
+    int shift = 0;      // -1: not a power of two
     void set(uint64_t v);
     uint64_t div(uint64_t x) const { return shift >= 0 ? x >> shift : x / d; }
-    uint64_t mod(uint64_t x) const { return shift >= 0 ? x & (d - 1) : x % d; }
+    uint64_t mod(uint64_t x) const { return shift >= 0 ? x & mask : x % d; }
   };
 
   struct Bank {
@@ -93,11 +94,29 @@ class MemorySystem {
     uint64_t row;
   };
   Location locate(uint64_t addr) const;
+  // Consecutive bursts from a burst-aligned address that share one location:
+  // up to the next channel (interleave chunk) or row boundary, whichever is first.
+  struct Run {
+    Location loc;
+    uint64_t bursts;
+  };
+  // The address map's constants. access() works on a local copy: the compiler
+  // can keep it in registers across the stores of the booking.
+  struct AddressMap {
+    Divisor burst, interleave, channel, row, bank;
+    uint64_t interleave_bytes = 0, row_bytes = 0;
+    bool multi_channel = false;  // chunk ends split runs
+    bool pow2 = false;           // interleave, channels, row and banks all powers of two
+    Run locateRun(uint64_t addr) const;
+  };
+  // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to
+  // bus_bytes_per_interval (bucket of each burst's start cycle).
+  void sampleBursts(uint64_t xfer, uint64_t n, uint64_t step);
 
   DramConfig cfg_;
   double core_mhz_ = 0;
   uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, burst_ticks_ = 0;
-  Divisor burst_div_, interleave_div_, channel_div_, row_div_, bank_div_;
+  AddressMap map_;
   std::vector<uint64_t> bus_free_;    // ticks, per channel
   std::vector<uint64_t> busy_ticks_;  // ticks, per channel
   std::vector<Bank> banks_;           // channel-major: channel * banks + bank

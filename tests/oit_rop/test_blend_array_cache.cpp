@@ -2,7 +2,9 @@
 // computed by hand (policies in oit_rop/MEMORY.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "oit_rop/BlendArrayCache.hpp"
@@ -265,6 +267,243 @@ TEST(BlendArrayCache, HitUnderMissWaitsForTheFillAndCountsAsHit) {
   EXPECT_EQ(cache.stats().misses, 1u);
   EXPECT_TRUE(cache.touched(5));  // the write under the miss marks it
   EXPECT_EQ(mem.stats().readBytes(), kLine);  // no second fill
+}
+
+// Reference: the policies of MEMORY.md written out plainly (tag search over the
+// set, miss queue as a list of free-at cycles, first invalid way else the
+// smallest LRU stamp), driving its own MemorySystem.
+class ReferenceCache {
+ public:
+  ReferenceCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base, MemorySystem& mem,
+                 bool fast_clear)
+      : cfg_(cfg), line_bytes_(line_bytes), base_(base), mem_(mem), fast_clear_(fast_clear), touched_(tiles, false) {
+    const uint64_t lines = std::max<uint64_t>(1, cfg.size_bytes / line_bytes);
+    ways_ = uint32_t(std::min<uint64_t>(cfg.ways, lines));
+    sets_ = uint32_t(lines / ways_);
+    lines_.assign(size_t(sets_) * ways_, Line{});
+    queue_.assign(cfg.miss_queue, 0);
+  }
+
+  Cycle acquire(Cycle now, uint32_t tile, bool write) {
+    Line* set = &lines_[size_t(tile % sets_) * ways_];
+    for (uint32_t w = 0; w < ways_; ++w) {
+      Line& l = set[w];
+      if (!l.valid || l.tile != tile) continue;
+      ++stats.accesses;
+      ++stats.hits;
+      l.used = ++clock_;
+      if (write) l.dirty = touched_[tile] = true;
+      if (l.ready > now + cfg_.hit_latency) {
+        ++stats.hits_under_miss;
+        return l.ready;
+      }
+      return now + cfg_.hit_latency;
+    }
+    int free_entry = -1;
+    uint32_t busy = 0;
+    for (size_t i = 0; i < queue_.size(); ++i) {
+      if (queue_[i] > now)
+        ++busy;
+      else if (free_entry < 0)
+        free_entry = int(i);
+    }
+    if (free_entry < 0) {
+      ++stats.miss_queue_full;
+      return kNever;
+    }
+    ++stats.accesses;
+    ++stats.misses;
+    Line* victim = nullptr;
+    for (uint32_t w = 0; w < ways_ && !victim; ++w)
+      if (!set[w].valid) victim = &set[w];
+    if (!victim) {
+      victim = &set[0];
+      for (uint32_t w = 1; w < ways_; ++w)
+        if (set[w].used < victim->used) victim = &set[w];
+    }
+    Cycle ready = now + cfg_.hit_latency;
+    if (victim->valid) {
+      ++stats.evictions;
+      if (victim->dirty) {
+        ++stats.writebacks;
+        ready = std::max(ready, mem_.access(now, base_ + uint64_t(victim->tile) * line_bytes_, line_bytes_, true,
+                                            Surface::BlendArrays));
+      }
+    }
+    if (fast_clear_ && !touched_[tile])
+      ++stats.clear_fills;
+    else
+      ready = std::max(ready, mem_.access(now, base_ + uint64_t(tile) * line_bytes_, line_bytes_, false,
+                                          Surface::BlendArrays));
+    *victim = Line{true, tile, write, ++clock_, ready};
+    if (write) touched_[tile] = true;
+    queue_[size_t(free_entry)] = ready;
+    stats.peak_misses_in_flight = std::max(stats.peak_misses_in_flight, busy + (ready > now ? 1u : 0u));
+    return ready;
+  }
+  bool resident(uint32_t tile) const {
+    const Line* set = &lines_[size_t(tile % sets_) * ways_];
+    for (uint32_t w = 0; w < ways_; ++w)
+      if (set[w].valid && set[w].tile == tile) return true;
+    return false;
+  }
+  uint32_t inFlight(Cycle now) const {
+    return uint32_t(std::count_if(queue_.begin(), queue_.end(), [now](Cycle c) { return c > now; }));
+  }
+
+  CacheStats stats;
+
+ private:
+  struct Line {
+    bool valid = false;
+    uint32_t tile = 0;
+    bool dirty = false;
+    uint64_t used = 0;
+    Cycle ready = 0;
+  };
+  CacheConfig cfg_;
+  uint32_t line_bytes_, ways_, sets_;
+  uint64_t base_;
+  MemorySystem& mem_;
+  bool fast_clear_;
+  std::vector<bool> touched_;
+  std::vector<Line> lines_;
+  std::vector<Cycle> queue_;
+  uint64_t clock_ = 0;
+};
+
+// Seeded random acquire streams (repeated tiles, a working set larger than the
+// cache, reads and writes, time mostly forward but sometimes back, retries
+// after refusals) over power-of-two and odd geometries: every returned cycle,
+// every stats field, the DRAM traffic, residency and the miss queue equal the
+// reference's.
+TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
+  struct Shape {
+    uint32_t lines;
+    unsigned ways, miss_queue, hit_latency;
+    uint32_t tiles;
+  };
+  const Shape shapes[] = {
+      {64, 8, 16, 10, 512},  // igpu-like: 8 sets of 8
+      {24, 8, 5, 3, 200},    // 3 sets
+      {10, 4, 2, 10, 64},    // 2 sets, 2 lines dropped
+      {3, 8, 1, 1, 16},      // one fully associative set of 3, one miss entry
+      {1, 1, 3, 0, 8},       // one line, zero hit latency
+      {7, 1, 4, 80, 100},    // direct mapped, 7 sets
+      {32, 16, 32, 80, 4000} // dgpu-like
+  };
+  uint64_t x = 12345;
+  auto rnd = [&x](uint64_t n) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    return (x >> 21) % n;
+  };
+  int cases = 0;
+  for (const Shape& sh : shapes) {
+    for (bool fast_clear : {false, true}) {
+      DramConfig d = roundDram(1 + cases % 3);
+      MemorySystem mem(d, kMhz), ref_mem(d, kMhz);
+      const CacheConfig cfg = cacheOf(sh.lines, sh.ways, sh.miss_queue, sh.hit_latency);
+      const uint64_t base = uint64_t(cases) << 20;
+      BlendArrayCache cache(cfg, kLine, sh.tiles, base, mem, fast_clear);
+      ReferenceCache ref(cfg, kLine, sh.tiles, base, ref_mem, fast_clear);
+      const std::string what = std::to_string(sh.lines) + " lines " + std::to_string(sh.ways) + " ways mq " +
+                               std::to_string(sh.miss_queue) + (fast_clear ? " fast clear" : "");
+      Cycle now = 0;
+      uint32_t tile = 0;
+      uint64_t refused = 0;
+      for (int i = 0; i < 20000; ++i) {
+        const uint64_t r = rnd(16);
+        if (r < 8) {
+          // same tile again
+        } else if (r < 12) {
+          tile = uint32_t(rnd(std::min<uint32_t>(sh.tiles, sh.lines * 2)));  // a hot working set
+        } else {
+          tile = uint32_t(rnd(sh.tiles));
+        }
+        const bool write = rnd(3) != 0;
+        const Cycle at = rnd(50) == 0 ? now - std::min<Cycle>(now, rnd(300)) : now;
+        const Cycle want = ref.acquire(at, tile, write);
+        ASSERT_EQ(cache.acquire(at, tile, write), want) << what << ", acquire " << i;
+        refused += want == kNever;
+        now += rnd(3);
+        if (rnd(64) == 0) now += rnd(500);
+      }
+      const CacheStats& a = cache.stats();
+      const CacheStats& b = ref.stats;
+      EXPECT_EQ(a.accesses, b.accesses) << what;
+      EXPECT_EQ(a.hits, b.hits) << what;
+      EXPECT_EQ(a.misses, b.misses) << what;
+      EXPECT_EQ(a.clear_fills, b.clear_fills) << what;
+      EXPECT_EQ(a.evictions, b.evictions) << what;
+      EXPECT_EQ(a.writebacks, b.writebacks) << what;
+      EXPECT_EQ(a.miss_queue_full, b.miss_queue_full) << what;
+      EXPECT_EQ(a.peak_misses_in_flight, b.peak_misses_in_flight) << what;
+      EXPECT_EQ(a.hits_under_miss, b.hits_under_miss) << what;
+      EXPECT_EQ(mem.stats().readBytes(), ref_mem.stats().readBytes()) << what;
+      EXPECT_EQ(mem.stats().writeBytes(), ref_mem.stats().writeBytes()) << what;
+      EXPECT_EQ(mem.stats().last_completion, ref_mem.stats().last_completion) << what;
+      for (uint32_t t = 0; t < sh.tiles; ++t) ASSERT_EQ(cache.resident(t), ref.resident(t)) << what << " tile " << t;
+      for (Cycle c : {Cycle(0), now / 2, now, now + 100, now + 1000})
+        EXPECT_EQ(cache.missesInFlight(c), ref.inFlight(c)) << what;
+      // The streams do reach the cases that matter.
+      EXPECT_EQ(refused, a.miss_queue_full) << what;
+      EXPECT_GT(a.hits, 0u) << what;
+      EXPECT_GT(a.evictions, 0u) << what;
+      EXPECT_GT(a.hits_under_miss, 0u) << what;
+      if (sh.miss_queue <= 5) {
+        EXPECT_GT(a.miss_queue_full, 0u) << what;
+      }
+      ++cases;
+    }
+  }
+  EXPECT_EQ(cases, 14);
+}
+
+// Victim choice pinned by hand: the first invalid way even when a valid way is
+// older, then the least recently used; hits refresh the LRU order.
+TEST(BlendArrayCache, FirstInvalidWayThenLeastRecentlyUsed) {
+  MemorySystem mem(roundDram(), kMhz);
+  BlendArrayCache cache(cacheOf(4, 4), kLine, 16, 0, mem, true);  // one set of 4 ways
+  cache.acquire(0, 0, false);
+  cache.acquire(1, 1, false);
+  cache.acquire(2, 0, false);  // hit
+  cache.acquire(3, 2, false);
+  cache.acquire(4, 3, false);  // fills the last invalid way: no eviction yet
+  EXPECT_EQ(cache.stats().evictions, 0u);
+  cache.acquire(5, 4, false);  // LRU is 1 (used at 1; 0 was used again at 2)
+  EXPECT_FALSE(cache.resident(1));
+  cache.acquire(6, 2, false);  // hit: now 0 is LRU
+  cache.acquire(7, 5, false);
+  EXPECT_FALSE(cache.resident(0));
+  for (uint32_t t : {2u, 3u, 4u, 5u}) EXPECT_TRUE(cache.resident(t)) << t;
+  EXPECT_EQ(cache.stats().evictions, 2u);
+  EXPECT_EQ(cache.stats().hits, 2u);
+}
+
+// The miss queue frees entries by time, not by order, and the peak counts the
+// entries busy right after an accepted miss, including when `now` goes back.
+TEST(BlendArrayCache, MissQueueEntriesFreeByTimeAndPeakCountsBusyOnes) {
+  MemorySystem mem(roundDram(), kMhz);
+  BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/3), kLine, 64, 0, mem, true);
+  // Fast clear: fills are ready at now + 10.
+  EXPECT_EQ(cache.acquire(100, 0, false), 110u);
+  EXPECT_EQ(cache.acquire(100, 1, false), 110u);
+  EXPECT_EQ(cache.acquire(105, 2, false), 115u);
+  EXPECT_EQ(cache.stats().peak_misses_in_flight, 3u);
+  EXPECT_EQ(cache.acquire(109, 3, false), kNever);
+  EXPECT_EQ(cache.missesInFlight(109), 3u);
+  EXPECT_EQ(cache.missesInFlight(110), 1u);
+  // At 110 entries 0 and 1 are free: entry 0 takes the new miss (ready 120).
+  EXPECT_EQ(cache.acquire(110, 3, false), 120u);
+  EXPECT_EQ(cache.missesInFlight(110), 2u);
+  // Back in time to 108: entry 1 (110) and entry 2 (115) are busy, entry 0 (120)
+  // too: refused.
+  EXPECT_EQ(cache.acquire(108, 4, false), kNever);
+  EXPECT_EQ(cache.acquire(116, 4, false), 126u);  // entries 1 and 2 free: entry 1
+  EXPECT_EQ(cache.missesInFlight(116), 2u);        // 120 and 126
+  EXPECT_EQ(cache.missesInFlight(111), 3u);        // 115 (entry 2) as well
+  EXPECT_EQ(cache.stats().miss_queue_full, 2u);
+  EXPECT_EQ(cache.stats().peak_misses_in_flight, 3u);
 }
 
 TEST(BlendArrayCache, RejectsBadInput) {

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "oit_rop/MemorySystem.hpp"
 
@@ -263,6 +265,274 @@ TEST(MemorySystem, EarlierNowOnABusyBankDoesNotGoBackInTime) {
   // was opened and its transfer ended.
   const Cycle late = m.access(0, 65536, 64, false, Surface::Depth);
   EXPECT_EQ(late, first + kTrp + kTrcd + kCl + kBurst);
+}
+
+// A request of several bursts inside one interleave chunk that crosses a row
+// boundary (row_bytes < interleave_bytes): the chunk's bursts go to two banks.
+// Round config, 2 channels, 128 B rows: local [0, 256) of channel 0 is bank 0
+// (bursts at 0, 64) and bank 1 (128, 192).
+TEST(MemorySystem, ChunkCrossingARowSplitsOverBanks) {
+  DramConfig c = roundConfig(2);
+  c.row_bytes = 128;
+  MemorySystem m(c, kRoundMhz);
+  ASSERT_EQ(m.bankOf(64), 0u);
+  ASSERT_EQ(m.bankOf(128), 1u);
+  ASSERT_EQ(m.channelOf(192), 0u);
+  // Both banks activate at 40 + tRCD = 51; bank 0's bursts at 62 and 66, bank
+  // 1's wait for the bus: 70 and 74, done at 78.
+  EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 78u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().row_hits, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 16u);
+  EXPECT_EQ(m.stats().channel_busy[1], 0u);
+  // Bank 1 row 0 is open: a later hit to local 192 pays CL only.
+  EXPECT_EQ(m.access(1000, 192, 64, false, Surface::Depth), 1000 + kCtrl + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 3u);
+}
+
+// The bus bytes of a request are bucketed burst by burst by the cycle each
+// burst starts on the bus, also when one request's bursts straddle intervals.
+TEST(MemorySystem, BusBytesOfOneRequestStraddleIntervals) {
+  // Open row, 1 channel: bursts start at 62, 66, 70, 74.
+  {
+    MemorySystem m(roundConfig(1), kRoundMhz);
+    m.setSampleInterval(68);
+    m.access(0, 0, 256, false, Surface::Depth);
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, (std::vector<uint64_t>{128, 128}));
+  }
+  {
+    MemorySystem m(roundConfig(1), kRoundMhz);
+    m.setSampleInterval(7);  // buckets 8, 9, 10, 10
+    m.access(0, 0, 256, false, Surface::Depth);
+    std::vector<uint64_t> want(11, 0);
+    want[8] = 64;
+    want[9] = 64;
+    want[10] = 128;
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, want);
+  }
+  // Closed row: every burst re-activates after the previous one's data and
+  // precharge, 37 cycles apart: starts 62, 99, 136, 173, done at 177.
+  {
+    DramConfig c = roundConfig(1);
+    c.open_row = false;
+    MemorySystem m(c, kRoundMhz);
+    m.setSampleInterval(50);
+    EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 177u);
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, (std::vector<uint64_t>{0, 128, 64, 64}));
+    EXPECT_EQ(m.stats().row_misses, 4u);
+    EXPECT_EQ(m.stats().row_hits, 0u);
+  }
+  // igpu timings are fractional: starts 77.625, 83.375, 89.125, 94.875 are in
+  // cycles 77, 83, 89, 94.
+  {
+    MemorySystem m(DramConfig{}, 1150.0);
+    m.setSampleInterval(1);
+    EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 101u);  // ceil(94.875 + 5.75)
+    const auto& bus = m.stats().bus_bytes_per_interval;
+    ASSERT_EQ(bus.size(), 95u);
+    for (size_t i = 0; i < bus.size(); ++i)
+      EXPECT_EQ(bus[i], (i == 77 || i == 83 || i == 89 || i == 94) ? 64u : 0u) << i;
+  }
+}
+
+// Reference: the per-burst booking of MEMORY.md written out directly (address
+// mapping by its formulas, one burst at a time), on the ticks the model uses.
+class ReferenceDram {
+ public:
+  ReferenceDram(const DramConfig& c, const MemorySystem& m)
+      : c_(c),
+        ctrl_(ticks(m.controllerCycles())),
+        cl_(ticks(m.clCycles())),
+        trcd_(ticks(m.trcdCycles())),
+        trp_(ticks(m.trpCycles())),
+        burst_(ticks(m.burstCycles())),
+        bus_(c.channels, 0),
+        busy_(c.channels, 0),
+        banks_(size_t(c.channels) * c.banks) {
+    stats_.channel_busy.assign(c.channels, 0);
+  }
+  void setSampleInterval(Cycle i) { interval_ = i; }
+  const MemoryStats& stats() const { return stats_; }
+
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
+    if (bytes == 0) return now;
+    (write ? stats_.write_bytes : stats_.read_bytes)[unsigned(s)] += bytes;
+    ++stats_.requests;
+    const uint64_t arrive = (now << 16) + ctrl_;
+    uint64_t done = arrive;
+    const uint64_t B = c_.burst_bytes, I = c_.interleave_bytes, C = c_.channels, R = c_.row_bytes, K = c_.banks;
+    for (uint64_t a = addr / B * B; a < addr + bytes; a += B) {
+      const uint64_t ch = (a / I) % C;
+      const uint64_t local = a / (I * C) * I + a % I;
+      const uint64_t bank_index = (local / R) % K;
+      const uint64_t row = local / (R * K);
+      Bank& k = banks_[ch * K + bank_index];
+      uint64_t col;
+      if (c_.open_row) {
+        if (k.open && k.row == row) {
+          ++stats_.row_hits;
+          col = std::max(arrive, k.row_ready);
+        } else {
+          ++stats_.row_misses;
+          uint64_t pre = std::max({arrive, k.row_ready, k.last_end});
+          k.row_ready = pre + (k.open ? trp_ : 0) + trcd_;
+          k.open = true;
+          k.row = row;
+          col = k.row_ready;
+        }
+      } else {
+        ++stats_.row_misses;
+        col = std::max(arrive, k.act_ready) + trcd_;
+      }
+      const uint64_t start = std::max(col + cl_, bus_[ch]);
+      const uint64_t end = start + burst_;
+      bus_[ch] = end;
+      k.last_end = std::max(k.last_end, end);
+      if (!c_.open_row) k.act_ready = k.last_end + trp_;
+      if (interval_) {
+        const uint64_t bucket = (start >> 16) / interval_;
+        if (bucket >= stats_.bus_bytes_per_interval.size()) stats_.bus_bytes_per_interval.resize(bucket + 1, 0);
+        stats_.bus_bytes_per_interval[bucket] += B;
+      }
+      busy_[ch] += burst_;
+      stats_.channel_busy[ch] = (busy_[ch] + 0xffff) >> 16;
+      done = std::max(done, end);
+    }
+    const Cycle completion = (done + 0xffff) >> 16;
+    stats_.last_completion = std::max(stats_.last_completion, completion);
+    return completion;
+  }
+
+ private:
+  static uint64_t ticks(double cycles) { return uint64_t(std::llround(std::ldexp(cycles, 16))); }
+  struct Bank {
+    bool open = false;
+    uint64_t row = 0, row_ready = 0, last_end = 0, act_ready = 0;
+  };
+  DramConfig c_;
+  uint64_t ctrl_, cl_, trcd_, trp_, burst_;
+  std::vector<uint64_t> bus_, busy_;
+  std::vector<Bank> banks_;
+  MemoryStats stats_;
+  Cycle interval_ = 0;
+};
+
+void expectSameStats(const MemoryStats& got, const MemoryStats& want, const std::string& what) {
+  EXPECT_EQ(got.read_bytes, want.read_bytes) << what;
+  EXPECT_EQ(got.write_bytes, want.write_bytes) << what;
+  EXPECT_EQ(got.requests, want.requests) << what;
+  EXPECT_EQ(got.row_hits, want.row_hits) << what;
+  EXPECT_EQ(got.row_misses, want.row_misses) << what;
+  EXPECT_EQ(got.channel_busy, want.channel_busy) << what;
+  EXPECT_EQ(got.last_completion, want.last_completion) << what;
+  EXPECT_EQ(got.bus_bytes_per_interval, want.bus_bytes_per_interval) << what;
+}
+
+struct Geometry {
+  unsigned channels, banks, row_bytes, burst_bytes, interleave_bytes;
+};
+
+// Seeded random request streams (unaligned starts, 1 B .. 8 KiB, reads and
+// writes, callers slightly out of time order) on regular and odd geometries,
+// both row policies and several sample intervals: every completion and every
+// stats field equals the burst-by-burst reference.
+TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
+  const Geometry geometries[] = {
+      {1, 8, 8192, 64, 256},  // igpu-like, 1 channel
+      {2, 8, 8192, 64, 256},  // igpu
+      {4, 16, 4096, 64, 256}, // dgpu
+      {3, 6, 8192, 64, 256},  // non-power-of-two channels and banks
+      {2, 5, 320, 64, 192},   // rows of 5 bursts, chunks of 3: chunks cross rows
+      {3, 3, 128, 64, 256},   // rows shorter than a chunk
+      {4, 7, 96, 32, 96},     // row = chunk, odd everything
+      {1, 3, 192, 64, 128},   // one channel, rows not a multiple of the chunk
+      {2, 2, 64, 64, 64},     // one burst per row and per chunk
+  };
+  struct Timing {
+    double mhz, gbps, tck, ctrl;
+  };
+  const Timing timings[] = {{1000.0, 16.0, 1.0, 40.0}, {1150.0, 12.8, 1.25, 40.0}, {1600.0, 56.0, 0.667, 100.0}};
+  uint64_t x = 0x9e3779b97f4a7c15ull;
+  auto rnd = [&x](uint64_t n) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    return (x >> 17) % n;
+  };
+  int cases = 0;
+  for (const Geometry& g : geometries) {
+    for (bool open : {true, false}) {
+      for (Cycle interval : {Cycle(0), Cycle(1), Cycle(7), Cycle(10000)}) {
+        const Timing& t = timings[cases % 3];
+        DramConfig c;
+        c.channels = g.channels;
+        c.banks = g.banks;
+        c.row_bytes = g.row_bytes;
+        c.burst_bytes = g.burst_bytes;
+        c.interleave_bytes = g.interleave_bytes;
+        c.open_row = open;
+        c.channel_gbps = t.gbps;
+        c.tck_ns = t.tck;
+        c.controller_ns = t.ctrl;
+        c.cl = 11 + unsigned(cases % 5);
+        c.trcd = 11;
+        c.trp = 9 + unsigned(cases % 7);
+        MemorySystem m(c, t.mhz);
+        ReferenceDram ref(c, m);
+        m.setSampleInterval(interval);
+        ref.setSampleInterval(interval);
+        const std::string what = std::to_string(g.channels) + " ch " + std::to_string(g.banks) + " banks row " +
+                                 std::to_string(g.row_bytes) + " il " + std::to_string(g.interleave_bytes) +
+                                 (open ? " open" : " closed") + " interval " + std::to_string(interval);
+        // A small address range (many row hits and conflicts) or a large one.
+        const uint64_t range = (cases % 2) ? (uint64_t(1) << 20) : (uint64_t(1) << 34);
+        Cycle now = 0;
+        uint64_t addr = 0;
+        uint32_t bytes = 1;
+        for (int i = 0; i < 3000; ++i) {
+          const uint64_t kind = rnd(12);
+          // 10: streaming on from the previous request, 11: the same address again.
+          if (kind == 10)
+            addr += bytes;
+          else if (kind == 9)
+            addr = rnd(range) / 2048 * 2048;
+          else if (kind != 11)
+            addr = rnd(range);
+          if (kind < 3)
+            bytes = uint32_t(1 + rnd(64));
+          else if (kind < 6)
+            bytes = uint32_t(1 + rnd(8192));
+          else
+            bytes = uint32_t(64) << rnd(6);  // 64 B .. 2 KiB
+          // Mostly forward in time, bursty, sometimes a caller up to a quantum behind.
+          const Cycle at = rnd(8) == 0 ? now - std::min<Cycle>(now, rnd(1000)) : now;
+          now += rnd(4) == 0 ? rnd(400) : 0;
+          const bool write = rnd(2) == 1;
+          const Surface s = Surface(rnd(kSurfaceCount));
+          const Cycle want = ref.access(at, addr, bytes, write, s);
+          ASSERT_EQ(m.access(at, addr, bytes, write, s), want) << what << ", request " << i;
+        }
+        expectSameStats(m.stats(), ref.stats(), what);
+        // A change of interval on the way keeps the series consistent too.
+        if (interval) {
+          m.setSampleInterval(interval * 3);
+          ref.setSampleInterval(interval * 3);
+          for (int i = 0; i < 200; ++i) {
+            addr = rnd(range);
+            bytes = uint32_t(1 + rnd(4096));
+            EXPECT_EQ(m.access(now + Cycle(i), addr, bytes, false, Surface::Colour),
+                      ref.access(now + Cycle(i), addr, bytes, false, Surface::Colour))
+                << what;
+          }
+          expectSameStats(m.stats(), ref.stats(), what + " (interval changed)");
+        }
+        EXPECT_GT(m.stats().row_misses, 0u) << what;
+        if (open) {
+          EXPECT_GT(m.stats().row_hits, 0u) << what;
+        }
+        ++cases;
+      }
+    }
+  }
+  EXPECT_EQ(cases, 9 * 2 * 4);
 }
 
 TEST(MemorySystem, RejectsInvalidGeometry) {
