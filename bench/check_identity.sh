@@ -67,7 +67,7 @@ for c in "${configs[@]}"; do
   if cmp -s "$work/$name.before.json" "$work/$name.after.json"; then
     echo "same  $name (timing ${t_before} s -> ${t_after} s)"
   else
-    echo "DIFF  $name:"; diff <(tr ',' '\n' <"$work/$name.before.json") <(tr ',' '\n' <"$work/$name.after.json") | head -10
+    echo "DIFF  $name:"; diff <(tr ',' '\n' <"$work/$name.before.json") <(tr ',' '\n' <"$work/$name.after.json") | head -10 || true
     fail=1
   fi
 done

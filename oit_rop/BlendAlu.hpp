@@ -30,14 +30,35 @@ class BlendAlu {
   // row, Merged rewrites the whole array (merge / eviction), Discarded only
   // compares. Without lazy merging (skip.lazy_merge = false) every kept
   // fragment pays the merge. `array_rows` = the layout's rows (>= 1 used).
-  static unsigned rowsFor(model::InsertOutcome outcome, unsigned array_rows, bool lazy_merge);
+  static unsigned rowsFor(model::InsertOutcome outcome, unsigned array_rows, bool lazy_merge) {
+    const unsigned merge = std::max(1u, array_rows);
+    switch (outcome) {
+      case model::InsertOutcome::Stored: return lazy_merge ? 1u : merge;
+      case model::InsertOutcome::Merged: return merge;
+      case model::InsertOutcome::Discarded: return 0u;
+    }
+    return 0u;
+  }
   static double formatRate(const AluConfig& cfg, const model::StateLayout& layout);
 
   unsigned latency(unsigned rows) const { return cfg_.base_latency + cfg_.row_latency * rows; }
   unsigned slots(Cycle now) { return rate_.available(now); }
   Cycle nextSlot(Cycle now) const { return rate_.nextAvailable(now); }
   // Starts one blend (or a drop of a late-culled fragment: rows = 0).
-  void issue(Cycle now, uint32_t token, unsigned rows, bool drop = false);
+  void issue(Cycle now, uint32_t token, unsigned rows, bool drop = false) {  // inline: once per fragment
+    rate_.take();
+    rows = std::min<unsigned>(rows, unsigned(done_.size() - 1));
+    const Cycle done = now + latency(rows);
+    done_[rows].push({done, token});
+    next_done_ = std::min(next_done_, done);
+    ++in_flight_;
+    if (drop) {
+      ++stats_.dropped;
+    } else {
+      ++stats_.blends;
+      stats_.rows += rows;
+    }
+  }
   // Calls f(token) for each blend finishing at `now`.
   template <class F>
   void complete(Cycle now, F&& f) {

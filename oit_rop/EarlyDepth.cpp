@@ -15,28 +15,17 @@ EarlyDepth::EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t t
       tag_ready_(std::max(1u, depth_tiles), 0),
       q_(256) {}
 
-void EarlyDepth::push(Cycle now, uint32_t token, uint32_t tile, bool needs_read) {
-  ++stats_.tested;
-  const Cycle passed = now + cfg_.latency;
-  Cycle ready = passed;
-  if (needs_read) {
-    const size_t slot = tile % tag_.size();
-    if (tag_[slot] == tile + 1) {
-      ++stats_.depth_buffer_hits;
-    } else {
-      // The read starts when the fragment enters; its latency overlaps the stage's.
-      ++stats_.depth_reads;
-      tag_[slot] = tile + 1;
-      tag_ready_[slot] = mem_.access(now, depth_base_ + uint64_t(tile) * tile_bytes_, tile_bytes_, false,
-                                     Surface::Depth);
-    }
-    ready = std::max(ready, tag_ready_[slot]);
+Cycle EarlyDepth::depthTile(Cycle now, uint32_t tile) {
+  const size_t slot = tile % tag_.size();
+  if (tag_[slot] == tile + 1) {
+    ++stats_.depth_buffer_hits;
   } else {
-    ++stats_.hiz_decided;
+    // The read starts when the fragment enters; its latency overlaps the stage's.
+    ++stats_.depth_reads;
+    tag_[slot] = tile + 1;
+    tag_ready_[slot] = mem_.access(now, depth_base_ + uint64_t(tile) * tile_bytes_, tile_bytes_, false, Surface::Depth);
   }
-  ready = std::max(ready, last_ready_);
-  last_ready_ = ready;
-  q_.push({token, ready, passed});
+  return tag_ready_[slot];
 }
 
 Cycle EarlyDepth::nextEvent(Cycle now) const {

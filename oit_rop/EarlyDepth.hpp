@@ -10,6 +10,7 @@
 // ("cache-miss wait"). Throughput: `per_clock` fragments per cycle.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -28,10 +29,22 @@ class EarlyDepth {
              MemoryPort& mem, unsigned depth_tiles = 16);
 
   // A shaded fragment arrives; `needs_read` = the HiZ could not decide it.
-  void push(Cycle now, uint32_t token, uint32_t tile, bool needs_read);
+  void push(Cycle now, uint32_t token, uint32_t tile, bool needs_read) {  // inline: once per fragment
+    ++stats_.tested;
+    const Cycle passed = now + cfg_.latency;
+    Cycle ready = passed;
+    if (needs_read)
+      ready = std::max(ready, depthTile(now, tile));
+    else
+      ++stats_.hiz_decided;
+    ready = std::max(ready, last_ready_);
+    last_ready_ = ready;
+    q_.push({token, ready, passed});
+  }
   // Calls f(token) for each fragment leaving the stage at `now` (in order).
   template <class F>
   unsigned leave(Cycle now, F&& f) {
+    if (q_.empty() || q_.front().ready > now) return 0;  // the common cycle: nobody due
     unsigned n = 0, slots = rate_.available(now);
     while (n < slots && !q_.empty() && q_.front().ready <= now) {
       const uint32_t t = q_.front().token;
@@ -52,6 +65,7 @@ class EarlyDepth {
   const EarlyDepthStats& stats() const { return stats_; }
 
  private:
+  Cycle depthTile(Cycle now, uint32_t tile);  // cycle the tile's depth is in the buffer
   struct Entry {
     uint32_t token;
     Cycle ready;   // when it may leave (latency, depth data)

@@ -78,8 +78,8 @@ bool FrontEnd::canRefill() const {
   return true;
 }
 
-void FrontEnd::popped(unsigned partition) {
-  if (waiters_ != 0 && queues_[partition].size() == kLowWatermark) {
+void FrontEnd::wakeWaiters(unsigned partition) {
+  if (queues_[partition].size() == kLowWatermark) {
     waiters_ = 0;
     drained_.notify(sc_core::SC_ZERO_TIME);
   }

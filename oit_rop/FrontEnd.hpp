@@ -70,7 +70,9 @@ class FrontEnd {
   // to every partition and a rewind).
   void refill();
   // A partition popped its queue below the low watermark.
-  void popped(unsigned partition);
+  void popped(unsigned partition) {  // inline: once per fragment
+    if (waiters_ != 0) wakeWaiters(partition);
+  }
   sc_core::sc_event& drained() { return drained_; }
   void addWaiter() { ++waiters_; }
 
@@ -91,6 +93,7 @@ class FrontEnd {
   const std::vector<uint64_t>& opaquePerPartition() const { return opaque_per_part_; }
 
  private:
+  void wakeWaiters(unsigned partition);
   FragmentSource& src_;
   model::OitAlgorithm& algo_;
   const model::DrawClassifier& classes_;

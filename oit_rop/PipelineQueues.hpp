@@ -19,18 +19,21 @@ namespace oit::rop {
 template <class T>
 class Fifo {
  public:
-  explicit Fifo(size_t initial = 16) { buf_.resize(std::bit_ceil(std::max<size_t>(initial, 2))); }
+  explicit Fifo(size_t initial = 16) {
+    buf_.resize(std::bit_ceil(std::max<size_t>(initial, 2)));
+    mask_ = buf_.size() - 1;
+  }
   bool empty() const { return size_ == 0; }
   size_t size() const { return size_; }
   T& front() { return buf_[head_]; }
   const T& front() const { return buf_[head_]; }
   void push(const T& v) {
-    if (size_ == buf_.size()) grow();
-    buf_[(head_ + size_) & (buf_.size() - 1)] = v;
+    if (size_ > mask_) grow();
+    buf_[(head_ + size_) & mask_] = v;
     ++size_;
   }
   void pop() {
-    head_ = (head_ + 1) & (buf_.size() - 1);
+    head_ = (head_ + 1) & mask_;
     --size_;
   }
   void clear() { head_ = size_ = 0; }
@@ -38,11 +41,13 @@ class Fifo {
  private:
   void grow() {
     std::vector<T> n(buf_.size() * 2);
-    for (size_t i = 0; i < size_; ++i) n[i] = buf_[(head_ + i) & (buf_.size() - 1)];
+    for (size_t i = 0; i < size_; ++i) n[i] = buf_[(head_ + i) & mask_];
     buf_.swap(n);
     head_ = 0;
+    mask_ = buf_.size() - 1;
   }
   std::vector<T> buf_;
+  size_t mask_ = 0;  // buf_.size() - 1 (a power of two minus one)
   size_t head_ = 0, size_ = 0;
 };
 
@@ -101,6 +106,7 @@ class TimingWheel {
 class RateLimiter {
  public:
   static constexpr int64_t kOne = 256;
+  static constexpr unsigned kShift = 8;  // kOne = 1 << kShift
   explicit RateLimiter(double per_clock = 1.0) {
     if (!(per_clock > 0)) throw std::invalid_argument("rate per clock must be > 0");
     rate_ = std::max<int64_t>(1, int64_t(per_clock * kOne + 0.5));
@@ -114,13 +120,15 @@ class RateLimiter {
       credit_ = dt >= Cycle(cap_) ? cap_ : std::min(cap_, credit_ + rate_ * int64_t(dt));
       last_ = now;
     }
-    return unsigned(credit_ / kOne);
+    return unsigned(uint64_t(credit_) >> kShift);  // credit_ >= 0: take() only spends what available() granted
   }
   void take() { credit_ -= kOne; }
-  // Earliest cycle > now at which one token is available (after available(now)).
+  // Earliest cycle > now at which one token is available. Counted from the
+  // last available() call, so callers may skip available() on cycles where
+  // they take nothing (the credit accrues the same either way).
   Cycle nextAvailable(Cycle now) const {
     if (credit_ >= kOne) return now + 1;
-    return now + Cycle((kOne - credit_ + rate_ - 1) / rate_);
+    return std::max(now + 1, last_ + Cycle((kOne - credit_ + rate_ - 1) / rate_));
   }
   double perClock() const { return double(rate_) / kOne; }
 

@@ -39,6 +39,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
   payload_.set_data_ptr(dummy_data);
   node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
+  for (size_t i = 0; i < kStageCount; ++i) codes_ |= uint64_t(code(status_[i])) << (8 * i);
   SC_THREAD(run);
 }
 
@@ -79,6 +80,13 @@ void RopPartition::advance(Cycle next, bool count_skip) {
 
 void RopPartition::setAll(StageStatus v) {
   for (size_t i = 0; i < kStageCount; ++i) setStatus(Stage(i), v);
+}
+
+void RopPartition::setStatuses(uint64_t codes, unsigned stages) {
+  for (unsigned i = 0; i < stages; ++i) {
+    const uint8_t c = uint8_t(codes >> (8 * i));
+    if (c != uint8_t(codes_ >> (8 * i))) setStatus(Stage(i), decode(c));
+  }
 }
 
 void RopPartition::flushAccounts() {
@@ -178,7 +186,9 @@ bool RopPartition::transparentStep() {
   }
 
   // BlendArrayCache pipeline -> BlendAlu (in order).
-  const unsigned alu_slots = alu_.slots(now);
+  // (Rate limiters are asked only when something could pass: their credit
+  // accrues the same whether or not they are asked every cycle.)
+  const unsigned alu_slots = !cache_q_.empty() && cache_q_.front().ready <= now ? alu_.slots(now) : 0;
   unsigned to_alu = 0;
   bool alu_blocked = false;
   while (!cache_q_.empty() && cache_q_.front().ready <= now) {
@@ -234,11 +244,13 @@ bool RopPartition::transparentStep() {
 
   // Issue from the routed input into the shader (needs a scoreboard entry).
   auto& q = front_.queue(id_);
-  const unsigned slots = shader_.slots(now);
   unsigned issued = 0;
   bool sb_full = false, draining = false;
   starving_ = false;
   if (q.empty()) refillInput();  // eagerly, so the input's state never depends on skipped cycles
+  // A full scoreboard blocks a fragment at the head whatever the issue rate.
+  const bool blocked = !q.empty() && !(q.front().flags & InRec::kPassEnd) && lock_.full();
+  const unsigned slots = blocked ? 0 : shader_.slots(now);
   while (issued < slots) {
     if (q.empty()) {
       refillInput();
@@ -282,38 +294,40 @@ bool RopPartition::transparentStep() {
   // Input waiting without a free entry (also when no issue slot this cycle).
   if (!issued && !q.empty() && !(q.front().flags & InRec::kPassEnd) && lock_.full()) sb_full = true;
 
-  // Status of every stage in this cycle (holds until the next evaluated cycle).
+  // Status of every stage in this cycle (holds until the next evaluated cycle),
+  // one byte per stage; the accounts are touched only for stages whose status
+  // changed (most evaluated cycles change none or one).
+  constexpr uint8_t kIdle = code(StageStatus::idle()), kBusy = code(StageStatus::busy());
+  constexpr auto stall = [](Stall c) { return code(StageStatus::stall(c)); };
   const bool in_shader = shader_.inShader() != 0;
   const bool in_early = early_.size() != 0;
-  if (issued) setStatus(Stage::ShaderInput, StageStatus::busy());
-  else if (sb_full) setStatus(Stage::ShaderInput, StageStatus::stall(Stall::ScoreboardFull));
-  else if (starving_) setStatus(Stage::ShaderInput, StageStatus::stall(Stall::InputStarved));
-  else if (in_shader) setStatus(Stage::ShaderInput, StageStatus::busy());
-  else setStatus(Stage::ShaderInput, StageStatus::idle());
+  uint8_t c0, c1, c2, c3, c4;
+  if (issued) c0 = kBusy;
+  else if (sb_full) c0 = stall(Stall::ScoreboardFull);
+  else if (starving_) c0 = stall(Stall::InputStarved);
+  else c0 = in_shader ? kBusy : kIdle;
 
-  if (early_.headWaitsForDepth(now) && !left) setStatus(Stage::EarlyDepth, StageStatus::stall(Stall::CacheMissWait));
-  else if (left || in_early) setStatus(Stage::EarlyDepth, StageStatus::busy());
-  else if (in_shader) setStatus(Stage::EarlyDepth, StageStatus::stall(Stall::InputStarved));
-  else setStatus(Stage::EarlyDepth, StageStatus::idle());
+  if (early_.headWaitsForDepth(now) && !left) c1 = stall(Stall::CacheMissWait);
+  else if (left || in_early) c1 = kBusy;
+  else c1 = in_shader ? stall(Stall::InputStarved) : kIdle;
 
-  const bool upstream_of_lock = in_shader || in_early;
-  if (accepted) setStatus(Stage::PixelLock, StageStatus::busy());
-  else if (refused) setStatus(Stage::PixelLock, StageStatus::stall(Stall::CacheMissWait));
-  else if (lock_.waiting()) setStatus(Stage::PixelLock, StageStatus::stall(Stall::LockWait));
-  else if (upstream_of_lock) setStatus(Stage::PixelLock, StageStatus::stall(Stall::InputStarved));
-  else setStatus(Stage::PixelLock, StageStatus::idle());
+  if (accepted) c2 = kBusy;
+  else if (refused) c2 = stall(Stall::CacheMissWait);
+  else if (lock_.waiting()) c2 = stall(Stall::LockWait);
+  else c2 = in_shader || in_early ? stall(Stall::InputStarved) : kIdle;
 
+  const bool occupied = lock_.occupancy() != 0;
   const bool head_waits = !cache_q_.empty() && cache_q_.front().ready > now;
-  if (to_alu || accepted || (head_waits && !cache_q_.front().miss)) setStatus(Stage::Cache, StageStatus::busy());
-  else if (refused || head_waits) setStatus(Stage::Cache, StageStatus::stall(Stall::CacheMissWait));
-  else if (alu_blocked) setStatus(Stage::Cache, StageStatus::stall(Stall::AluBusy));
-  else if (lock_.occupancy()) setStatus(Stage::Cache, StageStatus::stall(Stall::InputStarved));
-  else setStatus(Stage::Cache, StageStatus::idle());
+  if (to_alu || accepted || (head_waits && !cache_q_.front().miss)) c3 = kBusy;
+  else if (refused || head_waits) c3 = stall(Stall::CacheMissWait);
+  else if (alu_blocked) c3 = stall(Stall::AluBusy);
+  else c3 = occupied ? stall(Stall::InputStarved) : kIdle;
 
-  if (to_alu || alu_.inFlight()) setStatus(Stage::BlendAlu, StageStatus::busy());
-  else if (lock_.occupancy()) setStatus(Stage::BlendAlu, StageStatus::stall(Stall::InputStarved));
-  else setStatus(Stage::BlendAlu, StageStatus::idle());
-  setStatus(Stage::Resolve, StageStatus::idle());
+  if (to_alu || alu_.inFlight()) c4 = kBusy;
+  else c4 = occupied ? stall(Stall::InputStarved) : kIdle;
+  // (Resolve stays idle through the transparent phase.)
+  const uint64_t codes = uint64_t(c0) | uint64_t(c1) << 8 | uint64_t(c2) << 16 | uint64_t(c3) << 24 | uint64_t(c4) << 32;
+  if (codes != (codes_ & 0xFFFFFFFFFFull)) setStatuses(codes, 5);
 
   // Next cycle at which any stage can move.
   Cycle next = now + 1;

@@ -101,7 +101,15 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     res_.accounts.stage[i].add(status_[i], now_ - since_[i]);
     status_[i] = v;
     since_[i] = now_;
+    codes_ = (codes_ & ~(uint64_t(0xFF) << (8 * i))) | uint64_t(code(v)) << (8 * i);
   }
+  // A status as one byte (kind | cause << 2) and back; codes_ holds status_ packed.
+  static constexpr uint8_t code(StageStatus v) { return uint8_t(uint8_t(v.kind) | uint8_t(v.cause) << 2); }
+  static constexpr StageStatus decode(uint8_t c) {
+    return StageStatus{StageStatus::Kind(c & 3), Stall(c >> 2)};
+  }
+  // setStatus for stages 0 .. stages-1 from packed codes (byte i = stage i).
+  void setStatuses(uint64_t codes, unsigned stages);
   void setAll(StageStatus v);
   void flushAccounts();  // accounts every stage's current status up to now_
   void opaquePhase();
@@ -141,6 +149,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::vector<uint32_t> owned_;  // tiles of this partition
   std::array<StageStatus, kStageCount> status_{};
   std::array<Cycle, kStageCount> since_{};  // cycle the current status_[i] began
+  uint64_t codes_ = 0;                      // status_ packed, byte i = code(status_[i])
   bool starving_ = false;
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;

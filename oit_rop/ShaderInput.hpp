@@ -7,6 +7,7 @@
 // partition stalls issue with "scoreboard full" when none is free.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "oit_rop/PipelineQueues.hpp"
@@ -22,7 +23,25 @@ class ShaderInput {
   unsigned latencyOf(uint64_t seq, unsigned pass) const;
   // How many fragments may issue at `now` (input rate); take one per issue().
   unsigned slots(Cycle now) { return rate_.available(now); }
-  void issue(Cycle now, uint32_t token, uint64_t seq, unsigned pass);
+  void issue(Cycle now, uint32_t token, uint64_t seq, unsigned pass) {  // inline: once per fragment
+    rate_.take();
+    unsigned lat = fixed_lat_;
+    if (!fixed_) {
+      // latencyOf() with the per-pass half of the hash computed once per pass.
+      if (pass != mix_pass_) {
+        mix_pass_ = pass;
+        pass_mix_ = mix64(cfg_.seed ^ (uint64_t(pass) << 56));
+      }
+      lat = std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ seq))));
+    }
+    wheel_.schedule(now + lat, token);
+    ++issued_;
+  }
+  static uint64_t mix64(uint64_t z) {  // splitmix64 finaliser
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
   // Calls f(token) for each fragment whose shader finishes at `now`.
   template <class F>
   void finished(Cycle now, F&& f) {
@@ -40,6 +59,18 @@ class ShaderInput {
   uint64_t issued_ = 0;
   bool fixed_ = true;
   uint64_t span_ = 1;                    // latency_max - latency_min + 1
+  unsigned fixed_lat_ = 1;               // the fixed model's latency
+  // h % span_ without a 64-bit division (it was the costliest instruction of
+  // the issue): q = mulhi(h, floor(2^64 / span_)) is at most 2 below h / span_,
+  // so at most two corrections give the exact remainder.
+  __extension__ typedef unsigned __int128 U128;  // GCC/Clang extension (mulx)
+  uint64_t span_inv_ = 0;
+  uint64_t modSpan(uint64_t h) const {
+    const uint64_t q = uint64_t(U128(h) * span_inv_ >> 64);
+    uint64_t r = h - q * span_;
+    while (r >= span_) r -= span_;
+    return r;
+  }
   unsigned mix_pass_ = ~0u;              // pass whose hash half is in pass_mix_
   uint64_t pass_mix_ = 0;
 };

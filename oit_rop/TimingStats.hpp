@@ -25,9 +25,9 @@ const char* stallKey(Stall s);  // "lock_wait", ...
 struct StageStatus {
   enum Kind : uint8_t { Idle, Busy, Stalled } kind = Idle;
   Stall cause = Stall::InputStarved;
-  static StageStatus idle() { return {}; }
-  static StageStatus busy() { return {Busy, Stall::InputStarved}; }
-  static StageStatus stall(Stall c) { return {Stalled, c}; }
+  static constexpr StageStatus idle() { return {}; }
+  static constexpr StageStatus busy() { return {Busy, Stall::InputStarved}; }
+  static constexpr StageStatus stall(Stall c) { return {Stalled, c}; }
 };
 
 struct StageCycles {

@@ -64,3 +64,31 @@ TEST(TimingStats, AccountsBalanceAndPad) {
   EXPECT_STREQ(stallKey(Stall::ScoreboardFull), "scoreboard_full");
   EXPECT_STREQ(surfaceKey(oit::rop::Surface::BlendArrays), "blend_arrays");
 }
+
+// Stages ask their limiter only on cycles where something could pass;
+// nextAvailable() must then count from the last available() call, giving the
+// answer a limiter asked every cycle would give.
+TEST(PipelineQueues, RateLimiterNextAvailableIsTheSameWhetherAskedEveryCycleOrNot) {
+  for (double rate : {0.25, 0.3, 0.5, 1.0, 1.5, 2.0}) {
+    RateLimiter lazy(rate), eager(rate);
+    Cycle asked = 0;
+    for (Cycle now = 0; now < 400; ++now) {
+      eager.available(now);
+      // The lazy one is asked only every 7th cycle (and takes then).
+      if (now % 7 == 0) {
+        asked = now;
+        const unsigned a = lazy.available(now), b = eager.available(now);
+        ASSERT_EQ(a, b) << "rate " << rate << " cycle " << now;
+        if (a > 0) lazy.take(), eager.take();
+      }
+      ASSERT_EQ(lazy.nextAvailable(now), eager.nextAvailable(now)) << "rate " << rate << " cycle " << now
+                                                                    << " (last asked " << asked << ")";
+    }
+  }
+  RateLimiter r(0.25);
+  r.available(10);
+  r.take();                                // credit 0 at cycle 10
+  EXPECT_EQ(r.nextAvailable(10), 14u);     // one more token after 4 cycles
+  EXPECT_EQ(r.nextAvailable(12), 14u);     // the same when asked later, without available(12)
+  EXPECT_EQ(r.nextAvailable(20), 21u);     // already there: the next cycle
+}

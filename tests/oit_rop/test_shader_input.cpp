@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "oit_rop/ShaderInput.hpp"
@@ -67,4 +68,34 @@ TEST(ShaderInput, UniformLatencyReordersFragments) {
   for (size_t i = 1; i < order.size(); ++i) inversions += order[i] < order[i - 1];
   EXPECT_GT(inversions, 20u);
   EXPECT_EQ(s.issued(), 200u);
+}
+
+// issue() reduces the latency hash with a multiply instead of a 64-bit
+// division; every fragment must still leave after exactly latencyOf() cycles,
+// for spans that are and are not powers of two, one-cycle spans, and the
+// largest hashes.
+TEST(ShaderInput, IssuedFragmentsLeaveAfterLatencyOf) {
+  for (auto [lo, hi] : {std::pair{40u, 120u}, {1u, 1u}, {0u, 0u}, {3u, 4u}, {5u, 68u}, {1u, 1000u}, {0u, 6999u}}) {
+    InputConfig c;
+    c.latency_min = lo;
+    c.latency_max = hi;
+    c.seed = 0xC0FFEEull * (hi + 1);
+    for (unsigned pass : {0u, 3u}) {
+      ShaderInput s(c);
+      const uint64_t base = pass == 3 ? ~uint64_t(0) - 3000 : 0;  // sequence numbers up to 2^64 - 1
+      constexpr uint32_t kCount = 3000;
+      std::vector<Cycle> left(kCount, kNever);
+      unsigned done = 0;
+      for (Cycle now = 0; done < kCount; ++now) {
+        s.finished(now, [&](uint32_t t) { left[t] = now, ++done; });
+        if (now < kCount) {
+          ASSERT_GT(s.slots(now), 0u);  // one issue per cycle, below the rate
+          s.issue(now, uint32_t(now), base + now, pass);
+        }
+        ASSERT_LT(now, Cycle(kCount) + hi + 2);
+      }
+      for (uint32_t i = 0; i < kCount; ++i)
+        ASSERT_EQ(left[i], i + s.latencyOf(base + i, pass)) << "latency " << lo << ".." << hi << " seq " << base + i;
+    }
+  }
 }
