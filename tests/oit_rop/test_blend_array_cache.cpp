@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "TestLcg.hpp"
 #include "oit_rop/BlendArrayCache.hpp"
 
 namespace oit::rop {
@@ -392,11 +393,7 @@ TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
       {7, 1, 4, 80, 100},    // direct mapped, 7 sets
       {32, 16, 32, 80, 4000} // dgpu-like
   };
-  uint64_t x = 12345;
-  auto rnd = [&x](uint64_t n) {
-    x = x * 6364136223846793005ull + 1442695040888963407ull;
-    return (x >> 21) % n;
-  };
+  testutil::TestLcg rnd{12345, 21};
   int cases = 0;
   for (const Shape& sh : shapes) {
     for (bool fast_clear : {false, true}) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "TestLcg.hpp"
 #include "oit_rop/MemorySystem.hpp"
 
 namespace oit::rop {
@@ -452,11 +453,7 @@ TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
     double mhz, gbps, tck, ctrl;
   };
   const Timing timings[] = {{1000.0, 16.0, 1.0, 40.0}, {1150.0, 12.8, 1.25, 40.0}, {1600.0, 56.0, 0.667, 100.0}};
-  uint64_t x = 0x9e3779b97f4a7c15ull;
-  auto rnd = [&x](uint64_t n) {
-    x = x * 6364136223846793005ull + 1442695040888963407ull;
-    return (x >> 17) % n;
-  };
+  testutil::TestLcg rnd{0x9e3779b97f4a7c15ull, 17};
   int cases = 0;
   for (const Geometry& g : geometries) {
     for (bool open : {true, false}) {
