@@ -24,36 +24,27 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
                                        f.x, f.y, f.draw, why));
 }
 
-// Uninitialised, 2 MiB-aligned storage for the per-pixel state words.
-class StateBuffer {
- public:
-  explicit StateBuffer(size_t words) {
-    constexpr size_t kHuge = size_t(2) << 20;
-    const size_t bytes = std::max<size_t>(words * sizeof(uint32_t), 1);
-    const bool huge = bytes >= 2 * kHuge;  // small frames (tests): a plain cache-line-aligned block
-    const size_t align = huge ? kHuge : 64;
-    const size_t rounded = (bytes + align - 1) / align * align;
-    p_ = static_cast<uint32_t*>(std::aligned_alloc(align, rounded));
-    if (!p_) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    if (huge) madvise(p_, rounded, MADV_HUGEPAGE);  // a hint; ignored where unsupported
-#endif
-  }
-  ~StateBuffer() { std::free(p_); }
-  StateBuffer(const StateBuffer&) = delete;
-  StateBuffer& operator=(const StateBuffer&) = delete;
-  uint32_t* data() { return p_; }
-
- private:
-  uint32_t* p_ = nullptr;
-};
-
 size_t pixelOf(const FragmentSource& src, uint64_t index, const Fragment& f, uint32_t w, uint32_t h) {
   if (f.x >= w || f.y >= h)
     badFragment(src, index, f, fmt::format("outside the {}x{} frame", w, h));
   return size_t(f.y) * w + f.x;
 }
 }  // namespace
+
+StateBuffer::StateBuffer(size_t words) : size_(words) {
+  constexpr size_t kHuge = size_t(2) << 20;
+  const size_t bytes = std::max<size_t>(words * sizeof(uint32_t), 1);
+  const bool huge = bytes >= 2 * kHuge;  // small frames (tests): a plain cache-line-aligned block
+  const size_t align = huge ? kHuge : 64;
+  const size_t rounded = (bytes + align - 1) / align * align;
+  p_ = static_cast<uint32_t*>(std::aligned_alloc(align, rounded));
+  if (!p_) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+  if (huge) madvise(p_, rounded, MADV_HUGEPAGE);  // a hint; ignored where unsupported
+#endif
+}
+
+StateBuffer::~StateBuffer() { std::free(p_); }
 
 DrawClassifier::DrawClassifier(const TraceHeader& header) {
   for (const DrawInfo& d : header.draws) {
@@ -86,11 +77,20 @@ OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes)
   if (!classes.anyOpaque()) return o;
   src.rewind();
   uint64_t index = 0;
+  // Classified once per run of records of one draw (same result, same throw
+  // for an unknown draw: its first record is looked up).
+  uint32_t last_draw = 0;
+  bool last_opaque = false, have_last = false;
   for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
     for (const Fragment& f : batch) {
       const size_t p = pixelOf(src, index, f, h.width, h.height);
       ++index;
-      if (!classes.isOpaque(f.draw)) continue;
+      if (!have_last || f.draw != last_draw) {
+        last_opaque = classes.isOpaque(f.draw);
+        last_draw = f.draw;
+        have_last = true;
+      }
+      if (!last_opaque) continue;
       ++o.fragments;
       if (f.z < o.depth[p]) {  // LESS: the first of equal depths wins
         o.depth[p] = f.z;
@@ -125,10 +125,9 @@ RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo)
   const unsigned words = algo.stateWords();
   const size_t pixels = size_t(h.width) * h.height;
   // Per-pixel state: every word is written by clear() before use, so no
-  // zero fill; large buffers ask for transparent huge pages (first touch of
-  // tens of MB in 4 KiB pages was a third of a 1280x720 mlab render).
+  // zero fill.
   StateBuffer state(pixels * words);
-  for (size_t p = 0; p < pixels; ++p) algo.clear(state.data() + p * words);
+  algo.clearFrame(state.data(), pixels);
 
   for (unsigned pass = 0; pass < algoPasses; ++pass) {
     src.rewind();
@@ -136,11 +135,18 @@ RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo)
     auto& outcomes = counts.pass_outcomes[pass];
     uint64_t index = 0, culled = 0, opaqueSeen = 0, nextReport = opt_.progress_every;
     InsertContext ctx;
+    uint32_t last_draw = 0;
+    bool last_opaque = false, have_last = false;
     for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
       for (const Fragment& f : batch) {
         const size_t p = pixelOf(src, index, f, h.width, h.height);
         ++index;
-        if (classes.isOpaque(f.draw)) {
+        if (!have_last || f.draw != last_draw) {  // as in buildOpaqueLayer
+          last_opaque = classes.isOpaque(f.draw);
+          last_draw = f.draw;
+          have_last = true;
+        }
+        if (last_opaque) {
           ++opaqueSeen;
           continue;
         }

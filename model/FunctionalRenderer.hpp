@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -25,6 +26,25 @@
 #include "traces/TraceIO.hpp"
 
 namespace oit::model {
+
+// Uninitialised, 2 MiB-aligned storage for the per-pixel state words; large
+// buffers ask for transparent huge pages (first touch of tens of MB in 4 KiB
+// pages was a third of a 1280x720 mlab render, and inserts land per quad all
+// over the frame: fewer TLB misses).
+class StateBuffer {
+ public:
+  explicit StateBuffer(size_t words);
+  ~StateBuffer();
+  StateBuffer(const StateBuffer&) = delete;
+  StateBuffer& operator=(const StateBuffer&) = delete;
+  uint32_t* data() { return p_; }
+  const uint32_t* data() const { return p_; }
+  size_t size() const { return size_; }
+
+ private:
+  uint32_t* p_ = nullptr;
+  size_t size_ = 0;
+};
 
 // Opaque / transparent lookup of draw ids from the header's draw table.
 class DrawClassifier {

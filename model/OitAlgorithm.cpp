@@ -1,5 +1,7 @@
 #include "model/OitAlgorithm.hpp"
 
+#include <algorithm>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +16,18 @@ const char* toString(InsertOutcome o) {
     case InsertOutcome::Discarded: return "discarded";
   }
   return "unknown";
+}
+
+void OitAlgorithm::clearFrame(uint32_t* words, size_t pixels) {
+  if (pixels == 0) return;
+  clear(words);
+  // Doubling copies of the cleared prefix: log2(pixels) large memcpys.
+  const size_t total = pixels * state_words_;
+  for (size_t done = state_words_; done < total;) {
+    const size_t n = std::min(done, total - done);
+    std::memcpy(words + done, words, n * sizeof(uint32_t));
+    done += n;
+  }
 }
 
 std::string_view OitAlgorithm::passName(unsigned pass) const { return pass == 0 ? "insert" : "?"; }

@@ -8,6 +8,7 @@
 // Semantics and layouts of each algorithm: model/ALGORITHMS.md.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -84,8 +85,13 @@ class OitAlgorithm {
   virtual void beginFrame(const TraceHeader& header) {}
 
   // Writes every one of the stateWords() words (callers need not zero them;
-  // FunctionalRenderer hands in uninitialised memory).
+  // FunctionalRenderer hands in uninitialised memory). Contract: the words
+  // written do not depend on the pixel (same pattern for every pixel), so
+  // clearFrame may replicate one cleared pixel.
   virtual void clear(uint32_t* words) = 0;
+  // clear() of `pixels` consecutive pixels: one clear(), then copies (a
+  // virtual call per pixel was most of a full-screen clear).
+  void clearFrame(uint32_t* words, size_t pixels);
   // One fragment (already known transparent and in front of the opaque depth)
   // in pass `pass` < passes(); the fragments of every pass arrive in
   // submission order.

@@ -10,6 +10,7 @@ namespace {
 constexpr size_t kHighWatermark = size_t(1) << 20;  // records per partition backlog
 constexpr size_t kLowWatermark = kHighWatermark / 2;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr size_t kPrefetchAhead = 8;  // records ahead; not tuned
 }  // namespace
 
 FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
@@ -37,10 +38,10 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       hierarchical_(cfg.early_depth.hierarchical),
       words_(algo.stateWords()),
       passes_(algo.passes()),
+      state_(size_t(geo.width) * geo.height * algo.stateWords()),
       queues_(geo.partitions, Fifo<InRec>(1u << 12)) {
   const size_t pixels = size_t(geo.width) * geo.height;
-  state_.resize(pixels * words_);
-  for (size_t p = 0; p < pixels; ++p) algo_.clear(state_.data() + p * words_);
+  algo_.clearFrame(state_.data(), pixels);
 
   // Hierarchical Z per tile from the final opaque depth (+inf where none landed).
   const uint32_t tiles = geo.tiles();
@@ -62,9 +63,19 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
   if (classes.anyOpaque()) {
     src_.rewind();
     ++source_reads_;
+    // Classify once per run of records of one draw (the lookup's loads cannot
+    // be hoisted past the counter stores).
+    uint32_t last_draw = 0;
+    bool last_opaque = false, have_last = false;
     for (auto b = src_.next(); !b.empty(); b = src_.next())
-      for (const Fragment& f : b)
-        if (classes_.isOpaque(f.draw)) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
+      for (const Fragment& f : b) {
+        if (!have_last || f.draw != last_draw) {
+          last_draw = f.draw;
+          last_opaque = classes_.isOpaque(f.draw);
+          have_last = true;
+        }
+        if (last_opaque) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
+      }
   }
   counts_.pass_outcomes.assign(passes_, {});
   src_.rewind();
@@ -120,7 +131,23 @@ void FrontEnd::refill() {
   DrawCounts* dc = nullptr;
   bool last_opaque = false;
   model::InsertContext ctx;
-  for (const Fragment& f : batch) {
+  uint32_t* const state = state_.data();
+  const float* const opaque_z = opaque_.depth.data();
+  const size_t n = batch.size();
+  const size_t pixel_bytes = size_t(words_) * sizeof(uint32_t);
+  for (size_t i = 0; i < n; ++i) {
+    // The state (tens of MB) and the opaque depth are touched in quad order:
+    // fetch the lines of a record a few iterations ahead (a hint only; the
+    // prefetched record may be opaque or culled).
+    if (i + kPrefetchAhead < n) {
+      const Fragment& a = batch[i + kPrefetchAhead];
+      const size_t ap = size_t(a.y) * width + a.x;
+      const char* line = reinterpret_cast<const char*>(state + ap * words_);
+      __builtin_prefetch(line, 1);
+      if (pixel_bytes > 64) __builtin_prefetch(line + pixel_bytes - 1, 1);
+      __builtin_prefetch(opaque_z + ap);
+    }
+    const Fragment& f = batch[i];
     const uint32_t seq = uint32_t(index_++);
     if (f.draw != last_draw) {
       last_draw = f.draw;
@@ -133,7 +160,7 @@ void FrontEnd::refill() {
     }
     const uint32_t pixel = uint32_t(f.y) * width + f.x;
     const uint32_t tile = geo_.tileOf(f.x, f.y);
-    const float oz = opaque_.depth[pixel];
+    const float oz = opaque_z[pixel];
     InRec r{pixel, tile, seq, 0, 0, 0};
     if (hierarchical_ ? !(f.z < hiz_min_[tile] || f.z >= hiz_max_[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
@@ -145,7 +172,7 @@ void FrontEnd::refill() {
       }
     } else {
       ctx.opaque_z = oz;
-      const model::InsertOutcome o = algo_.insert(state_.data() + size_t(pixel) * words_, f, pass_, ctx);
+      const model::InsertOutcome o = algo_.insert(state + size_t(pixel) * words_, f, pass_, ctx);
       r.outcome = uint8_t(o);
       ++outcomes[size_t(o)];
       if (first) {

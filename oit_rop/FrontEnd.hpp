@@ -13,6 +13,7 @@
 
 #include <array>
 #include <functional>
+#include <span>
 #include <string>
 #include <cstdint>
 #include <unordered_map>
@@ -79,7 +80,7 @@ class FrontEnd {
   // Called about every 2^20 fragments routed: fraction of all passes done.
   void setProgress(std::function<void(double, const std::string&)> f) { progress_ = std::move(f); }
   unsigned passes() const { return passes_; }
-  const std::vector<uint32_t>& state() const { return state_; }
+  std::span<const uint32_t> state() const { return {state_.data(), state_.size()}; }
   const model::RenderCounts& counts() const { return counts_; }
   uint64_t sourceReads() const { return source_reads_; }
   // Per tile: min / max opaque depth (hierarchical Z), opaque pixels landed.
@@ -103,7 +104,7 @@ class FrontEnd {
   unsigned words_, passes_, pass_ = 0;
   bool exhausted_ = false;
   uint64_t index_ = 0, source_reads_ = 0;
-  std::vector<uint32_t> state_;
+  model::StateBuffer state_;  // uninitialised until clearFrame, huge pages
   std::vector<Fifo<InRec>> queues_;
   std::vector<float> hiz_min_, hiz_max_;
   std::vector<uint16_t> landed_;

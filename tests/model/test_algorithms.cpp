@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include "AlgoTestUtil.hpp"
@@ -376,6 +377,35 @@ TEST(Interface, DirectPerPixelCallsWithoutRenderer) {
   EXPECT_EQ(algo->resolve(words.data(), {0, 0, 0}), (Rgb{0.25f, 0.5f, 0.125f}));
   EXPECT_EQ(algo->readBytes(0, InsertOutcome::Merged), 40u);
   EXPECT_EQ(algo->writeBytes(0, InsertOutcome::Discarded), 0u);
+}
+
+TEST(Interface, ClearFrameEqualsPerPixelClear) {
+  // clearFrame replicates one clear(): valid only while clear() writes every
+  // word with the same pattern for every pixel (renderer and front end rely on it).
+  for (const AlgorithmInfo& info : algorithmNames()) {
+    const std::string name(info.name);
+    for (StorageFormat fmt : {StorageFormat::Fp32, StorageFormat::Fp16, StorageFormat::Rgba8T8Z32}) {
+      for (unsigned k : {1u, 3u, 8u}) {
+        AlgorithmParams p;
+        p.layers = k;
+        p.format = fmt;
+        std::unique_ptr<OitAlgorithm> algo;
+        try {
+          algo = makeAlgorithm(name, p);
+        } catch (const std::invalid_argument&) {
+          continue;  // combination not supported by this algorithm
+        }
+        algo->beginFrame(header(37, 1));
+        const unsigned w = algo->stateWords();
+        for (size_t pixels : {size_t(1), size_t(2), size_t(37)}) {
+          std::vector<uint32_t> per_pixel(pixels * w, 0xdeadbeefu), frame(pixels * w, 0x01234567u);
+          for (size_t i = 0; i < pixels; ++i) algo->clear(per_pixel.data() + i * w);
+          algo->clearFrame(frame.data(), pixels);
+          EXPECT_EQ(per_pixel, frame) << name << " " << toString(fmt) << " k " << k << " pixels " << pixels;
+        }
+      }
+    }
+  }
 }
 
 TEST(Hash, DeterministicAndSensitiveToEveryKeyField) {
