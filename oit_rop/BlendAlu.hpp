@@ -52,12 +52,10 @@ class BlendAlu {
     done_[rows].push({done, token});
     next_done_ = std::min(next_done_, done);
     ++in_flight_;
-    if (drop) {
-      ++stats_.dropped;
-    } else {
-      ++stats_.blends;
-      stats_.rows += rows;
-    }
+    // Counted by selects: drops are random per fragment.
+    stats_.dropped += drop;
+    stats_.blends += !drop;
+    stats_.rows += drop ? 0u : rows;
   }
   // Calls f(token) for each blend finishing at `now`.
   template <class F>

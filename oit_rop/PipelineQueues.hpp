@@ -80,16 +80,18 @@ class TimingWheel {
   // set bit of the occupancy bitmap from bucket now + 1 on, wrapping around.
   Cycle nextDue(Cycle now) const {
     if (count_ == 0) return kNever;
-    const size_t mask = buckets_.size() - 1, start = (now + 1) & mask, words = used_.size();
+    // words is a power of two (the bucket count is, and is < 64 only when words == 1),
+    // so the word index wraps with a mask (a % here was a division per call).
+    const size_t mask = buckets_.size() - 1, start = (now + 1) & mask, words = used_.size(), wmask = words - 1;
     const size_t w0 = start >> 6;
     uint64_t w = used_[w0] & (~uint64_t(0) << (start & 63));
     for (size_t k = 0;; ++k) {
       if (w) {
-        const size_t i = ((w0 + k) % words) * 64 + size_t(std::countr_zero(w));
+        const size_t i = ((w0 + k) & wmask) * 64 + size_t(std::countr_zero(w));
         return now + 1 + ((i - start) & mask);
       }
       if (k == words) return kNever;
-      w = used_[(w0 + k + 1) % words];
+      w = used_[(w0 + k + 1) & wmask];
       if (k + 1 == words) w &= ~(~uint64_t(0) << (start & 63));  // wrapped: the bits below start
     }
   }

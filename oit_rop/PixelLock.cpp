@@ -37,11 +37,12 @@ void PixelLock::eraseSlot(size_t i) {
     j = (j + 1) & mask_;
     if (map_[j].head < 0) break;
     const size_t k = hashOf(map_[j].address) & mask_;
-    const bool movable = (i <= j) ? (k <= i || k > j) : (k <= i && k > j);
-    if (movable) {
-      map_[i] = map_[j];
-      i = j;
-    }
+    // Movable unless its home k lies cyclically in (i, j]: compared as probe
+    // distances to j, and moved by selects (which way is random: no branch).
+    const bool movable = ((j - k) & mask_) >= ((j - i) & mask_);
+    const size_t from = movable ? j : i;
+    map_[i] = map_[from];  // a self-copy when not movable
+    i = from;
   }
   map_[i] = Slot{};
 }

@@ -36,6 +36,9 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       tail_q_(256) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
+  for (unsigned o = 0; o < model::kOutcomeCount; ++o)
+    rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
+  merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
   payload_.set_data_ptr(dummy_data);
   node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
@@ -200,7 +203,7 @@ bool RopPartition::transparentStep() {
     cache_q_.pop();
     const TokenInfo& k = tok_[e.token];
     const bool drop = (k.flags & InRec::kCulled) != 0;  // late cull: the blend drops it
-    if (drop) ++res_.culled_late;
+    res_.culled_late += drop;
     alu_.issue(now, e.token, drop ? 0u : k.rows, drop);
     ++to_alu;
   }
@@ -249,7 +252,8 @@ bool RopPartition::transparentStep() {
   starving_ = false;
   if (q.empty()) refillInput();  // eagerly, so the input's state never depends on skipped cycles
   // A full scoreboard blocks a fragment at the head whatever the issue rate.
-  const bool blocked = !q.empty() && !(q.front().flags & InRec::kPassEnd) && lock_.full();
+  // (Bitwise: front() of an empty Fifo is a stale slot, masked by !q.empty().)
+  const bool blocked = !q.empty() & !(q.front().flags & InRec::kPassEnd) & lock_.full();
   const unsigned slots = blocked ? 0 : shader_.slots(now);
   while (issued < slots) {
     if (q.empty()) {
@@ -279,10 +283,9 @@ bool RopPartition::transparentStep() {
       addr = lock_.address(r.pixel % geo_.width, r.pixel / geo_.width, geo_.tile_w, geo_.tile_h);
     const uint32_t t = lock_.allocate(addr);
     const bool culled = (r.flags & InRec::kCulled) != 0;
-    const auto outcome = model::InsertOutcome(r.outcome);
-    const uint8_t rows = culled ? 0 : uint8_t(BlendAlu::rowsFor(outcome, s_.array_rows, cfg_.skip.lazy_merge));
-    if (!culled && outcome == model::InsertOutcome::Stored && cfg_.skip.lazy_merge && s_.array_rows > 1)
-      ++res_.merges_skipped;
+    // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
+    const uint8_t rows = culled ? 0 : rows_of_[r.outcome & 3];
+    res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & merge_skip_);
     tok_[t] = TokenInfo{r.pixel, r.tile, r.flags, r.outcome, rows};
     shader_.issue(now, t, r.seq, pass_);
     q.pop();
@@ -290,9 +293,11 @@ bool RopPartition::transparentStep() {
     ++res_.fragments;
     ++issued;
   }
-  moved = moved || to_alu || accepted || left || shaded || issued;
+  // Bitwise, not short-circuit: each of these is data-dependent and would be a
+  // (often mispredicted) branch.
+  moved |= (to_alu | accepted | left | shaded | issued) != 0;
   // Input waiting without a free entry (also when no issue slot this cycle).
-  if (!issued && !q.empty() && !(q.front().flags & InRec::kPassEnd) && lock_.full()) sb_full = true;
+  sb_full |= !issued & !q.empty() & !(q.front().flags & InRec::kPassEnd) & lock_.full();
 
   // Status of every stage in this cycle (holds until the next evaluated cycle),
   // one byte per stage; the accounts are touched only for stages whose status

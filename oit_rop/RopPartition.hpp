@@ -144,6 +144,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::vector<Cycle> misses_;                // outstanding fill completions
   unsigned cache_ports_;
   bool early_cull_;
+  bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
+  std::array<uint8_t, 4> rows_of_{};  // BlendAlu::rowsFor by outcome (index 3: invalid, 0 rows)
   unsigned pass_ = 0;
   Cycle now_ = 0, next_sync_ = 0;
   std::vector<uint32_t> owned_;  // tiles of this partition
