@@ -6,15 +6,30 @@
 # bit for bit against the functional one.
 #
 #   bench/check_identity.sh BEFORE/bench_timing AFTER/bench_timing [--quick]
+#   bench/check_identity.sh --base REV AFTER/bench_timing [--quick]
 #
-# BEFORE is usually built from the parent commit in its own build directory:
-#   git worktree add /tmp/base HEAD~1 && cmake -S /tmp/base -B /tmp/base/build -G Ninja \
-#     && cmake --build /tmp/base/build --target bench_timing
-# --quick: only the small trace (about 1 minute instead of 3).
+# --base REV builds BEFORE itself: a detached git worktree of REV in
+# ${TMPDIR:-/tmp}/oitsim-base-<commit> and bench_timing in it (Release; kept, so a
+# second run with the same REV does not rebuild; `git worktree remove` it when done).
+# --quick: only the small trace (about 30 s instead of 1 minute).
 set -euo pipefail
 if [ $# -lt 2 ]; then
   echo "usage: $0 BEFORE_BENCH_TIMING AFTER_BENCH_TIMING [--quick]" >&2
+  echo "       $0 --base REV AFTER_BENCH_TIMING [--quick]" >&2
   exit 2
+fi
+if [ "$1" = --base ]; then
+  [ $# -ge 3 ] || { echo "$0: --base needs REV and AFTER_BENCH_TIMING" >&2; exit 2; }
+  repo=$(cd "$(dirname "$0")/.." && pwd)
+  commit=$(git -C "$repo" rev-parse --verify "$2^{commit}") || { echo "$0: --base $2: not a commit" >&2; exit 2; }
+  tree=${TMPDIR:-/tmp}/oitsim-base-${commit:0:12}
+  if [ ! -x "$tree/build/bench/bench_timing" ]; then
+    [ -d "$tree" ] || git -C "$repo" worktree add --detach "$tree" "$commit" >/dev/null
+    cmake -S "$tree" -B "$tree/build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake --build "$tree/build" --target bench_timing >/dev/null
+  fi
+  shift 2
+  set -- "$tree/build/bench/bench_timing" "$@"
 fi
 before=$1 after=$2 quick=${3:-}
 for b in "$before" "$after"; do
