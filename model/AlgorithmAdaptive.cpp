@@ -41,7 +41,7 @@ class Adaptive final : public OitAlgorithm {
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
     // a = 0 changes nothing and is skipped in both passes before counting, so
     // the per-pixel seq numbers of the two passes agree.
-    if (!(f.a > 0.0f)) return InsertOutcome::Discarded;
+    if (noContribution(f)) return InsertOutcome::Discarded;
     return pass == 0 ? build(w, f) : shade(w, f);
   }
 

@@ -36,6 +36,11 @@ inline void storeRow(StorageFormat f, const LayerRow& r, uint32_t* w) {
 
 inline constexpr LayerRow kEmptyRow{0.0f, 0.0f, 0.0f, 1.0f, kInf};
 
+// A fragment with a = 0 (or NaN alpha) changes no pixel in the reference;
+// letting it take a layer would only push real fragments out (notes, pitfall
+// 3). Every algorithm therefore discards it without touching the state.
+inline bool noContribution(const Fragment& f) { return !(f.a > 0.0f); }
+
 // encodeHalf(decodeHalf(h)) for both halves of a word, without the float
 // round trip: every finite half code comes back unchanged; an Inf code decodes
 // to +-65504 (re-encoded 0x7BFF / 0xFBFF), a NaN code to 0 (0x0000). encodeHalf

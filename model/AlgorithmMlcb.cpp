@@ -82,7 +82,7 @@ class Mlcb final : public OitAlgorithm {
   }
 
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
-    if (!(f.a > 0.0f)) return InsertOutcome::Discarded;  // a = 0: common rule
+    if (noContribution(f)) return InsertOutcome::Discarded;  // a = 0: common rule
     const uint64_t m = mlcbCoverageMask(f, b_, seed_);
     if (m == 0) return InsertOutcome::Discarded;  // rounded to no coverage: contributes nothing
     Layer L[kMaxLayers + 1];

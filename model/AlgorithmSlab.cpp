@@ -56,7 +56,7 @@ class Slab final : public OitAlgorithm {
   }
 
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
-    if (!(f.a > 0.0f)) return InsertOutcome::Discarded;  // skipped before counting, both passes
+    if (noContribution(f)) return InsertOutcome::Discarded;  // skipped before counting, both passes
     return pass == 0 ? select(w, f) : colour(w, f);
   }
 

@@ -32,7 +32,7 @@ class Stochastic final : public OitAlgorithm {
     for (unsigned i = 1; i < 5; ++i) w[s_ + i] = 0;
   }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
-    if (!(f.a > 0.0f)) return InsertOutcome::Discarded;
+    if (noContribution(f)) return InsertOutcome::Discarded;
     if (pass == 0) {
       w[s_] = asWord(asFloat(w[s_]) * (1.0f - f.a));
       const uint64_t m = coverage(f);

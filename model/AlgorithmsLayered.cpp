@@ -12,11 +12,6 @@
 namespace oit::model::detail {
 namespace {
 
-// A fragment with a = 0 changes no pixel in the reference; letting it take a
-// layer would only push real fragments out (notes, pitfall 3). Every
-// algorithm therefore discards it without touching the state.
-inline bool noContribution(const Fragment& f) { return !(f.a > 0.0f); }
-
 // Rows sorted front to back, empty rows (z = +inf) at the end.
 //
 // Every insert is MLAB's one-pass bubble (`f.z <= B[i].z`: swap and carry
@@ -99,6 +94,13 @@ class SortedRows : public OitAlgorithm {
     }
   }
 
+  // The rows composited over the background (mlab, kbuffer).
+  Rgb resolveRows(const uint32_t* w, Rgb bg) const {
+    float r, g, b, T;
+    composite(w, r, g, b, T);
+    return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
+  }
+
   StorageFormat fmt_;
   unsigned rw_;
   unsigned n_;  // sorted rows
@@ -117,11 +119,7 @@ class Mlab final : public SortedRows {
     if (noContribution(f)) return InsertOutcome::Discarded;
     return (this->*insert_)(w, f);
   }
-  Rgb resolve(const uint32_t* w, Rgb bg) override {
-    float r, g, b, T;
-    composite(w, r, g, b, T);
-    return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
-  }
+  Rgb resolve(const uint32_t* w, Rgb bg) override { return resolveRows(w, bg); }
 
  private:
   // The bubble in place (see SortedRows). With k + 1 rows the one falling
@@ -174,11 +172,7 @@ class KBuffer final : public SortedRows {
     if (noContribution(f)) return InsertOutcome::Discarded;
     return (this->*insert_)(w, f);
   }
-  Rgb resolve(const uint32_t* w, Rgb bg) override {
-    float r, g, b, T;
-    composite(w, r, g, b, T);
-    return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
-  }
+  Rgb resolve(const uint32_t* w, Rgb bg) override { return resolveRows(w, bg); }
 
  private:
   // The bubble in place (see SortedRows); the furthest of k + 1 rows is dropped.

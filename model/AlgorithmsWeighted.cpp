@@ -12,8 +12,6 @@
 namespace oit::model::detail {
 namespace {
 
-inline bool noContribution(const Fragment& f) { return !(f.a > 0.0f); }
-
 // The weighted sums every algorithm here keeps: (sum w c, sum w).
 inline void accumulate(Rgba& acc, const Fragment& f, float w) {
   acc.r += w * f.r;

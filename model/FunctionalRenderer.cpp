@@ -77,20 +77,12 @@ OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes)
   if (!classes.anyOpaque()) return o;
   src.rewind();
   uint64_t index = 0;
-  // Classified once per run of records of one draw (same result, same throw
-  // for an unknown draw: its first record is looked up).
-  uint32_t last_draw = 0;
-  bool last_opaque = false, have_last = false;
+  DrawRun draws(classes);
   for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
     for (const Fragment& f : batch) {
       const size_t p = pixelOf(src, index, f, h.width, h.height);
       ++index;
-      if (!have_last || f.draw != last_draw) {
-        last_opaque = classes.isOpaque(f.draw);
-        last_draw = f.draw;
-        have_last = true;
-      }
-      if (!last_opaque) continue;
+      if (!draws.isOpaque(f.draw)) continue;
       ++o.fragments;
       if (f.z < o.depth[p]) {  // LESS: the first of equal depths wins
         o.depth[p] = f.z;
@@ -135,18 +127,12 @@ RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo)
     auto& outcomes = counts.pass_outcomes[pass];
     uint64_t index = 0, culled = 0, opaqueSeen = 0, nextReport = opt_.progress_every;
     InsertContext ctx;
-    uint32_t last_draw = 0;
-    bool last_opaque = false, have_last = false;
+    DrawRun draws(classes);
     for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
       for (const Fragment& f : batch) {
         const size_t p = pixelOf(src, index, f, h.width, h.height);
         ++index;
-        if (!have_last || f.draw != last_draw) {  // as in buildOpaqueLayer
-          last_opaque = classes.isOpaque(f.draw);
-          last_draw = f.draw;
-          have_last = true;
-        }
-        if (last_opaque) {
+        if (draws.isOpaque(f.draw)) {
           ++opaqueSeen;
           continue;
         }

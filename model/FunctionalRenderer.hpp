@@ -65,6 +65,28 @@ class DrawClassifier {
   bool any_opaque_ = false;
 };
 
+// DrawClassifier::isOpaque remembered for the last draw id: traces come in
+// long runs of one draw, so the per-record loops classify once per run (the
+// lookup's loads cannot be hoisted past the loops' stores). Same answers, and
+// an unknown draw still throws at its first record.
+class DrawRun {
+ public:
+  explicit DrawRun(const DrawClassifier& classes) : classes_(classes) {}
+  bool isOpaque(uint32_t draw) {
+    if (!have_ || draw != draw_) {
+      opaque_ = classes_.isOpaque(draw);
+      draw_ = draw;
+      have_ = true;
+    }
+    return opaque_;
+  }
+
+ private:
+  const DrawClassifier& classes_;
+  uint32_t draw_ = 0;
+  bool opaque_ = false, have_ = false;
+};
+
 // Result of the opaque pre-pass (also what the timing model needs).
 struct OpaqueLayer {
   uint32_t width = 0, height = 0;

@@ -63,19 +63,10 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
   if (classes.anyOpaque()) {
     src_.rewind();
     ++source_reads_;
-    // Classify once per run of records of one draw (the lookup's loads cannot
-    // be hoisted past the counter stores).
-    uint32_t last_draw = 0;
-    bool last_opaque = false, have_last = false;
+    model::DrawRun draws(classes_);
     for (auto b = src_.next(); !b.empty(); b = src_.next())
-      for (const Fragment& f : b) {
-        if (!have_last || f.draw != last_draw) {
-          last_draw = f.draw;
-          last_opaque = classes_.isOpaque(f.draw);
-          have_last = true;
-        }
-        if (last_opaque) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
-      }
+      for (const Fragment& f : b)
+        if (draws.isOpaque(f.draw)) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
   }
   counts_.pass_outcomes.assign(passes_, {});
   src_.rewind();
