@@ -155,6 +155,12 @@ void RopPartition::refillInput() {
 
 Cycle RopPartition::missRetry() {
   // The miss queue frees when an outstanding fill completes.
+  const Cycle c = pruneMisses();
+  return c == kNever ? now_ + 1 : c;
+}
+
+Cycle RopPartition::pruneMisses() {
+  // Fills completed by now_ can never be the next event again (now_ only grows).
   Cycle c = kNever;
   size_t w = 0;
   for (Cycle m : misses_)
@@ -163,7 +169,18 @@ Cycle RopPartition::missRetry() {
       c = std::min(c, m);
     }
   misses_.resize(w);
-  return c == kNever ? now_ + 1 : c;
+  return c;
+}
+
+void RopPartition::recordMiss(Cycle ready) {
+  // Without refusals missRetry() never runs: drop completed fills here too, so
+  // the list stays about as long as the fills in flight instead of growing
+  // with every miss of the frame.
+  if (misses_.size() >= misses_cap_) {
+    pruneMisses();
+    misses_cap_ = std::max<size_t>(64, 2 * misses_.size());
+  }
+  misses_.push_back(ready);
 }
 
 bool RopPartition::transparentStep() {
@@ -222,7 +239,7 @@ bool RopPartition::transparentStep() {
     }
     lock_.enterFront(now);
     const bool miss = r > now + cfg_.cache.hit_latency;
-    if (miss) misses_.push_back(r);
+    if (miss) recordMiss(r);
     cache_q_.push({t, r, miss});
     ++accepted;
   }
@@ -411,7 +428,7 @@ void RopPartition::resolvePhase() {
         break;
       }
       const bool miss = r > now + cfg_.cache.hit_latency;
-      if (miss) misses_.push_back(r);
+      if (miss) recordMiss(r);
       pf.push({tiles[next_issue], r, miss});
       ++next_issue;
       ++acquired;
