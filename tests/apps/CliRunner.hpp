@@ -2,6 +2,8 @@
 // file and CSV helpers shared by the CLI tests.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -85,6 +87,34 @@ inline std::vector<std::string> csvSplit(const std::string& line) {
   }
   out.push_back(cur);
   return out;
+}
+
+// Compares two sweep results.csv tables (as lines) cell by cell, except the
+// columns that differ by nature: wall clock, and the paths and command line
+// that name the output folder. Returns the number of cells compared (0 after
+// a failed assertion on the table's shape).
+inline size_t compareSweepTables(const std::vector<std::string>& a, const std::vector<std::string>& b) {
+  size_t compared = 0;
+  [&] {
+    ASSERT_FALSE(a.empty());
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(a[0], b[0]);
+    const auto header = csvSplit(a[0]);
+    for (size_t i = 1; i < a.size(); ++i) {
+      const auto ra = csvSplit(a[i]), rb = csvSplit(b[i]);
+      ASSERT_EQ(ra.size(), header.size());
+      ASSERT_EQ(rb.size(), header.size());
+      for (size_t c = 0; c < header.size(); ++c) {
+        const std::string& h = header[c];
+        if (h.find("wall_seconds") != std::string::npos || h.find("per_second") != std::string::npos ||
+            h == "trace.path" || h == "oitsim.command")
+          continue;
+        EXPECT_EQ(ra[c], rb[c]) << "row " << i << " column " << h;
+        ++compared;
+      }
+    }
+  }();
+  return compared;
 }
 
 // A fresh directory under the test's working directory, removed on destruction.
