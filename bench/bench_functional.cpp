@@ -24,17 +24,15 @@
 //                    [--trace FILE] [--trace-mode both|file|memory]
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "bench/BenchCommon.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
-#include "traces/TraceIO.hpp"
 
 using namespace oit;
 using namespace oit::model;
@@ -82,15 +80,6 @@ double checksum(const Image& img) {
   return c;
 }
 
-[[noreturn]] void usage(const char* argv0, const std::string& why) {
-  std::fprintf(stderr,
-               "%s\nusage: %s [--algos all|a,b,...] [--k 4] [--format fp32|fp16|rgba8t8z32] [--size 256]\n"
-               "       [--width W] [--height H] [--layers 40] [--bits 32] [--order both|layered|raster]\n"
-               "       [--reps 3] [--trace FILE] [--trace-mode both|file|memory]\n",
-               why.c_str(), argv0);
-  std::exit(2);
-}
-
 // Best-of-reps render of one algorithm; `source` makes a fresh (rewound) source per rep.
 struct Timed {
   double best = 1e300;
@@ -110,20 +99,15 @@ Timed timeRenders(unsigned reps, OitAlgorithm& algo, const std::function<Fragmen
 int runTrace(const std::string& path, const std::string& mode, const std::vector<std::string>& names,
              const AlgorithmParams& params, unsigned reps, const std::string& format) {
   std::unique_ptr<FragmentSource> file;
+  std::unique_ptr<MemorySource> mem;
   try {
     file = openTrace(path);
+    if (mode != "file") mem = bench::loadTrace(path);  // read once, untimed
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;
   }
   const TraceHeader hdr = file->header();
-  std::unique_ptr<MemorySource> mem;
-  if (mode != "file") {  // read once, untimed
-    std::vector<Fragment> fs;
-    fs.reserve(hdr.fragment_count);
-    for (auto b = file->next(); !b.empty(); b = file->next()) fs.insert(fs.end(), b.begin(), b.end());
-    mem = std::make_unique<MemorySource>(hdr, std::move(fs));
-  }
   std::printf("# trace %s: %ux%u, %llu records, k=%u, format %s, bits %u, best of %u\n", path.c_str(), hdr.width,
               hdr.height, static_cast<unsigned long long>(hdr.fragment_count), params.layers, format.c_str(),
               params.bits, reps);
@@ -156,36 +140,29 @@ int runTrace(const std::string& path, const std::string& mode, const std::vector
 int main(int argc, char** argv) {
   std::string algos = "all", format = "fp32", order = "both", trace, traceMode = "both";
   unsigned k = 4, size = 256, width = 0, height = 0, layers = 40, bits = 32, reps = 3;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) usage(argv[0], "missing value after " + a);
-    const std::string v = argv[++i];
-    auto num = [&] {
-      char* end = nullptr;
-      const unsigned long n = std::strtoul(v.c_str(), &end, 10);
-      if (v.empty() || *end || n == 0 || n > 1000000) usage(argv[0], "bad number for " + a + ": " + v);
-      return unsigned(n);
-    };
-    if (a == "--algos") algos = v;
-    else if (a == "--k") k = num();
-    else if (a == "--format") format = v;
-    else if (a == "--size") size = num();
-    else if (a == "--width") width = num();
-    else if (a == "--height") height = num();
-    else if (a == "--trace") trace = v;
-    else if (a == "--trace-mode") traceMode = v;
-    else if (a == "--layers") layers = num();
-    else if (a == "--bits") bits = num();
-    else if (a == "--order") order = v;
-    else if (a == "--reps") reps = num();
-    else usage(argv[0], "unknown option " + a);
-  }
+  CLI::App app{"Throughput of the functional golden model per OIT algorithm"};
+  app.add_option("--algos", algos, "all, or a comma-separated list of algorithm names")->capture_default_str();
+  app.add_option("--k", k, "Layers (k) of the layered algorithms")->check(CLI::Range(1u, 64u))->capture_default_str();
+  app.add_option("--format", format, "Storage format: fp32, fp16 or rgba8t8z32")->capture_default_str();
+  app.add_option("--size", size, "Width and height of the synthetic scene")->check(CLI::Range(1u, 4096u))
+      ->capture_default_str();
+  app.add_option("--width", width, "Synthetic scene width (default --size)")->check(CLI::Range(1u, 4096u));
+  app.add_option("--height", height, "Synthetic scene height (default --size)")->check(CLI::Range(1u, 4096u));
+  app.add_option("--layers", layers, "Full-screen transparent layers")->check(CLI::Range(1u, 100000u))
+      ->capture_default_str();
+  app.add_option("--bits", bits, "Virtual bits (slab) / mask bits (mlcb)")->check(CLI::Range(1u, 1024u))
+      ->capture_default_str();
+  app.add_option("--order", order, "Submission order")->check(CLI::IsMember({"both", "layered", "raster"}))
+      ->capture_default_str();
+  app.add_option("--reps", reps, "Renders per algorithm; the best is reported")->check(CLI::Range(1u, 1000u))
+      ->capture_default_str();
+  app.add_option("--trace", trace, "Render this trace file instead of the synthetic scene")->check(CLI::ExistingFile);
+  app.add_option("--trace-mode", traceMode, "file: decode the trace in every render; memory: read it once first")
+      ->check(CLI::IsMember({"both", "file", "memory"}))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   if (width == 0) width = size;
   if (height == 0) height = size;
-  if (width > 4096 || height > 4096) usage(argv[0], "width and height must be <= 4096");
-  if (traceMode != "both" && traceMode != "file" && traceMode != "memory")
-    usage(argv[0], "bad --trace-mode " + traceMode);
-  if (order != "both" && order != "layered" && order != "raster") usage(argv[0], "bad --order " + order);
   std::vector<std::string> names;
   if (algos == "all")
     for (const AlgorithmInfo& info : algorithmNames()) names.emplace_back(info.name);
@@ -199,7 +176,8 @@ int main(int argc, char** argv) {
   try {
     params.format = parseStorageFormat(format);
   } catch (const std::invalid_argument& e) {
-    usage(argv[0], e.what());
+    std::fprintf(stderr, "--format: %s\n", e.what());
+    return 2;
   }
 
   if (!trace.empty()) return runTrace(trace, traceMode, names, params, reps, format);

@@ -18,14 +18,11 @@
 //                [--algo mlab] [--k 4] [--format rgba8t8z32] [--preset igpu]
 //                [--set path=value]... [--stats FILE]
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -33,28 +30,19 @@
 #include <string>
 #include <vector>
 
+#include "bench/BenchCommon.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
 #include "oit_rop/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
-#include "traces/TraceIO.hpp"
 
 using namespace oit;
+using bench::cpuSeconds;
 
 namespace {
 
 constexpr uint32_t kOpaque = 0, kTransparent = 1;
-
-[[noreturn]] void usage(const char* argv0, const std::string& why) {
-  std::fprintf(stderr,
-               "%s\nusage: %s [--mode both|functional|timing] [--reps 3] [--trace FILE]\n"
-               "       [--width 1280] [--height 720] [--quads 20500] [--quad 16] [--seed 7]\n"
-               "       [--algo mlab] [--k 4] [--format rgba8t8z32] [--preset igpu] [--set path=value]...\n"
-               "       [--stats FILE]\n",
-               why.c_str(), argv0);
-  std::exit(2);
-}
 
 // The synthetic particle trace (the former TimingRun.DISABLED_Throughput scene).
 model::MemorySource synthetic(uint32_t w, uint32_t h, unsigned quads, unsigned quad, uint32_t seed) {
@@ -77,13 +65,6 @@ model::MemorySource synthetic(uint32_t w, uint32_t h, unsigned quads, unsigned q
         fs.push_back(Fragment{uint16_t(x), uint16_t(y), z, r, g, b, a, q, kTransparent});
   }
   return model::MemorySource(hdr, std::move(fs));
-}
-
-// CPU time of this process: on a shared machine it varies less than wall time.
-double cpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 uint64_t imageHash(const model::Image& img) {  // FNV-1a over the raw float bits
@@ -139,35 +120,32 @@ extern "C" int sc_main(int argc, char* argv[]) {
   std::string mode = "both", trace, algo = "mlab", format = "rgba8t8z32", preset = "igpu", stats_path;
   std::vector<std::string> sets;
   unsigned reps = 3, width = 1280, height = 720, quads = 20500, quad = 16, seed = 7, k = 4;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) usage(argv[0], "missing value after " + a);
-    const std::string v = argv[++i];
-    auto num = [&] {
-      char* end = nullptr;
-      const unsigned long n = std::strtoul(v.c_str(), &end, 10);
-      if (v.empty() || *end || n > 100000000) usage(argv[0], "bad number for " + a + ": " + v);
-      return unsigned(n);
-    };
-    if (a == "--mode") mode = v;
-    else if (a == "--reps") reps = std::max(1u, num());
-    else if (a == "--trace") trace = v;
-    else if (a == "--width") width = num();
-    else if (a == "--height") height = num();
-    else if (a == "--quads") quads = num();
-    else if (a == "--quad") quad = num();
-    else if (a == "--seed") seed = num();
-    else if (a == "--algo") algo = v;
-    else if (a == "--k") k = num();
-    else if (a == "--format") format = v;
-    else if (a == "--preset") preset = v;
-    else if (a == "--set") sets.push_back(v);
-    else if (a == "--stats") stats_path = v;
-    else usage(argv[0], "unknown option " + a);
+  CLI::App app{"Timing-mode throughput (runTiming) against the functional model on the same trace"};
+  app.add_option("--mode", mode, "What to time")->check(CLI::IsMember({"both", "functional", "timing"}))
+      ->capture_default_str();
+  app.add_option("--reps", reps, "Runs of each mode; the best is reported")->check(CLI::Range(1u, 1000u))
+      ->capture_default_str();
+  app.add_option("--trace", trace, "Trace file (read into memory first) instead of the synthetic scene")
+      ->check(CLI::ExistingFile);
+  app.add_option("--width", width, "Synthetic scene width")->check(CLI::Range(2u, 65535u))->capture_default_str();
+  app.add_option("--height", height, "Synthetic scene height")->check(CLI::Range(2u, 65535u))->capture_default_str();
+  app.add_option("--quads", quads, "Synthetic transparent quads")->check(CLI::Range(0u, 100000000u))
+      ->capture_default_str();
+  app.add_option("--quad", quad, "Synthetic quad edge in pixels")->check(CLI::Range(1u, 4096u))->capture_default_str();
+  app.add_option("--seed", seed, "Synthetic scene seed")->capture_default_str();
+  app.add_option("--algo", algo, "OIT algorithm (oitsim run --help lists them)")->capture_default_str();
+  app.add_option("--k", k, "Layers (k) of the layered algorithms")->check(CLI::Range(1u, 64u))->capture_default_str();
+  app.add_option("--format", format, "Storage format of the blending arrays")->capture_default_str();
+  app.add_option("--preset", preset, "Configuration preset (igpu, dgpu)")->capture_default_str();
+  app.add_option("--set", sets, "Configuration override path=value (repeatable)");
+  app.add_option("--stats", stats_path, "Write the first timing run's stats JSON here");
+  try {
+    app.parse(argc, argv);
+    if (trace.empty() && (width <= quad || height <= quad))
+      throw CLI::ValidationError("--width/--height", "must exceed --quad (" + std::to_string(quad) + ")");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
   }
-  if (mode != "both" && mode != "functional" && mode != "timing") usage(argv[0], "bad --mode " + mode);
-  if (trace.empty() && (width <= quad || height <= quad || width > 65535 || height > 65535))
-    usage(argv[0], "--width and --height must exceed --quad and be <= 65535");
 
   model::AlgorithmParams params;
   params.layers = k;
@@ -175,19 +153,17 @@ extern "C" int sc_main(int argc, char* argv[]) {
   try {
     params.format = model::parseStorageFormat(format);
     cfg = rop::resolveConfig(preset, "", sets);
+    (void)model::makeAlgorithm(algo, params);  // unknown names and bad parameters fail here, not in a child
   } catch (const std::exception& e) {
-    usage(argv[0], e.what());
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
   }
 
   std::unique_ptr<model::MemorySource> src;
   std::string what;
   if (!trace.empty()) {
     try {
-      auto file = openTrace(trace);
-      std::vector<Fragment> fs;
-      fs.reserve(file->header().fragment_count);
-      for (auto b = file->next(); !b.empty(); b = file->next()) fs.insert(fs.end(), b.begin(), b.end());
-      src = std::make_unique<model::MemorySource>(file->header(), std::move(fs));
+      src = bench::loadTrace(trace);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "%s\n", e.what());
       return 1;

@@ -5,9 +5,9 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -36,13 +36,17 @@ Pass readOnce(const std::string& path, size_t batch) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const uint64_t count = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 50'000'000ull;
-  const std::string enc_name = argc > 2 ? argv[2] : "fp32";
-  const size_t batch = argc > 3 ? std::strtoull(argv[3], nullptr, 10) : size_t{1} << 16;
-  if (count == 0 || batch == 0 || (enc_name != "fp32" && enc_name != "unorm8")) {
-    std::fprintf(stderr, "usage: %s [RECORDS>0] [fp32|unorm8] [BATCH>0]\n", argv[0]);
-    return 2;
-  }
+  uint64_t count = 50'000'000ull;
+  std::string enc_name = "fp32";
+  size_t batch = size_t{1} << 16;
+  CLI::App app{"Warm read speed of binary traces (openTrace, validated)"};
+  app.add_option("records", count, "Records in the synthetic trace")->check(CLI::Range(uint64_t{1}, uint64_t{1} << 40))
+      ->capture_default_str();
+  app.add_option("encoding", enc_name, "Colour encoding")->check(CLI::IsMember({"fp32", "unorm8"}))
+      ->capture_default_str();
+  app.add_option("batch", batch, "Records per next() batch")->check(CLI::Range(size_t{1}, size_t{1} << 30))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   const auto enc = enc_name == "fp32" ? oit::ColourEncoding::Fp32 : oit::ColourEncoding::Unorm8;
   const std::string path = fmt::format("/tmp/oitsim-bench-read-{}.oitt", ::getpid());
   try {
