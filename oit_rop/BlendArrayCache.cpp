@@ -56,14 +56,21 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   const uint32_t entries = cfg_.miss_queue;
   uint32_t slot = 0;
   uint32_t in_flight = 0;
+  if (miss_queue_min_ > now) {
+    ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
+    return kNever;
+  }
   if (miss_queue_max_ > now) {
     slot = entries;
+    Cycle smallest = kNever;
     for (uint32_t i = entries; i-- > 0;) {  // backwards: the last free one seen is the first
       const bool busy = miss_queue_[i] > now;
       in_flight += busy;
       if (!busy) slot = i;
+      smallest = std::min(smallest, miss_queue_[i]);
     }
     if (slot == entries) {
+      miss_queue_min_ = smallest;  // exact: every entry is busy until then
       ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
       return kNever;
     }
@@ -103,7 +110,7 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   line_of_[tile] = static_cast<uint32_t>(victim_index);
   if (write) touched_[tile] = 1;
 
-  miss_queue_[slot] = ready;
+  miss_queue_[slot] = ready;  // (miss_queue_min_ <= now <= ready: still a lower bound)
   miss_queue_max_ = std::max(miss_queue_max_, ready);
   stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, in_flight + (ready > now ? 1u : 0u));
   return ready;

@@ -232,6 +232,7 @@ bool RopPartition::transparentStep() {
     const uint32_t t = lock_.frontReady();
     const TokenInfo& k = tok_[t];
     const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    const uint64_t fills = cache_.stats().misses;
     const Cycle r = cache_.acquire(now, k.tile, write);
     if (r == kNever) {
       refused = true;
@@ -239,7 +240,9 @@ bool RopPartition::transparentStep() {
     }
     lock_.enterFront(now);
     const bool miss = r > now + cfg_.cache.hit_latency;
-    if (miss) recordMiss(r);
+    // A hit under miss waits for a fill that misses_ already holds (recorded by
+    // the miss that started it), so only new fills are recorded.
+    if (miss & (cache_.stats().misses != fills)) recordMiss(r);
     cache_q_.push({t, r, miss});
     ++accepted;
   }
@@ -422,13 +425,14 @@ void RopPartition::resolvePhase() {
     unsigned acquired = 0;
     bool refused = false;
     while (next_issue < tiles.size() && pf.size() < kResolvePrefetch && acquired < cache_ports_) {
+      const uint64_t fills = cache_.stats().misses;
       const Cycle r = cache_.acquire(now, tiles[next_issue], false);
       if (r == kNever) {
         refused = true;
         break;
       }
       const bool miss = r > now + cfg_.cache.hit_latency;
-      if (miss) recordMiss(r);
+      if (miss & (cache_.stats().misses != fills)) recordMiss(r);  // (hits under miss: see transparentStep)
       pf.push({tiles[next_issue], r, miss});
       ++next_issue;
       ++acquired;
