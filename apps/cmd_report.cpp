@@ -5,8 +5,13 @@
 // reports/make_report.py (Debian's python3-matplotlib) draws the page.
 #include <fmt/core.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
+#include <fcntl.h>
 #include <filesystem>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "apps/Commands.hpp"
 
@@ -38,9 +43,29 @@ std::string quote(const std::string& a) {
   return q + "'";
 }
 
+// The page is written to FILE.tmp and renamed: both need a writable folder.
+// Checked before anything is written or the generator starts, so a bad --out
+// is one clear error rather than a failure half way through the script.
+void checkWritable(const fs::path& out, bool given) {
+  const std::string what = given ? "report: --out " + out.string() : "report: " + out.string();
+  std::error_code ec;
+  if (fs::is_directory(out, ec)) throw std::invalid_argument(what + ": is a folder (expected an HTML file path)");
+  const fs::path folder = out.parent_path();
+  if (!fs::is_directory(folder, ec))
+    throw std::invalid_argument(what + ": folder " + folder.string() + " does not exist");
+  const fs::path probe = out.string() + ".tmp";
+  const bool existed = fs::exists(probe, ec);
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  if (fd < 0) throw std::invalid_argument(what + ": cannot write " + probe.string() + ": " + std::strerror(errno));
+  ::close(fd);
+  if (!existed) fs::remove(probe, ec);
+}
+
 void runReport(const ReportArgs& a) {
   const fs::path dir = fs::absolute(a.dir);
   if (!fs::is_directory(dir)) throw std::invalid_argument("report: " + dir.string() + " is not a folder");
+  const std::string out = a.out.empty() ? (dir / "report.html").string() : fs::absolute(a.out).string();
+  checkWritable(out, !a.out.empty());
   if (fs::exists(dir / "plan.json")) {
     collectSweep(dir.string(), true);  // failed points are listed in the page, not an error here
   } else if (!fs::exists(dir / "results.json")) {
@@ -52,11 +77,16 @@ void runReport(const ReportArgs& a) {
     throw std::runtime_error(
         "report: needs " + pythonExe() + " with matplotlib and numpy (Debian: apt-get install python3-matplotlib; "
         "scripts/setup.sh installs it)");
-  const std::string out = a.out.empty() ? (dir / "report.html").string() : fs::absolute(a.out).string();
   const std::string cmd = quote(pythonExe()) + " " + quote(script) + " " + quote(dir.string()) + " --out " + quote(out) +
                           " --oitsim " + quote(selfExecutable()) + (a.quiet ? " --quiet" : "");
-  const int rc = std::system(cmd.c_str());
-  if (rc != 0) throw std::runtime_error(fmt::format("report: {} failed (exit status {})", script, rc));
+  // The script prints its own one-line error (to stderr) before exiting non-zero.
+  const int status = std::system(cmd.c_str());
+  if (status == -1) throw std::runtime_error("report: cannot start " + pythonExe() + ": " + std::strerror(errno));
+  if (WIFSIGNALED(status))
+    throw std::runtime_error(fmt::format("report: {} was killed by signal {}", script, WTERMSIG(status)));
+  if (WIFEXITED(status) && WEXITSTATUS(status) != 0)
+    throw std::runtime_error(fmt::format("report: {} failed (exit code {}); {} was not written", script,
+                                         WEXITSTATUS(status), out));
 }
 
 }  // namespace

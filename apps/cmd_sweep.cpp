@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -30,8 +31,11 @@
 #include <unistd.h>
 
 #include "apps/Commands.hpp"
+#include "model/OitAlgorithm.hpp"
+#include "model/StorageFormat.hpp"
 #include "oit_rop/ConfigTree.hpp"
 #include "reports/JsonReport.hpp"
+#include "traces/gen/Scenes.hpp"
 
 extern char** environ;
 
@@ -83,15 +87,111 @@ std::string scalarText(const ojson& v, const std::string& where) {
   throw std::invalid_argument(where + ": expected a string, number or boolean, got " + v.dump());
 }
 
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string r;
+  for (const auto& n : names) r += (r.empty() ? "" : ", ") + n;
+  return r;
+}
+
+// A whole number >= min, as a JSON number or a string of digits (YAML may give either).
+bool isWhole(const ojson& v, long long min) {
+  if (v.is_number_integer()) return v.get<long long>() >= min;
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    return d == std::floor(d) && d >= double(min) && d < 9.2e18;
+  }
+  if (v.is_string()) {
+    const std::string t = v.get<std::string>();
+    if (t.empty() || t.size() > 18 || t.find_first_not_of("0123456789") != std::string::npos) return false;
+    return std::stoll(t) >= min;
+  }
+  return false;
+}
+
+// One ROP parameter on its own (name, type, range); the constraints between
+// parameters are checked per point once the preset and every --set are known.
+void validateRopParameter(const std::string& key, const ojson& v, const std::string& where) {
+  try {
+    rop::ConfigTree::forPreset("igpu").set(key, scalarText(v, where));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ": " + key + " = " + v.dump() + ": " + e.what());
+  }
+}
+
+// Checks one value of a setting before anything runs (reports/SWEEP.md): run
+// options against what `oitsim run` accepts, ROP parameters through the
+// configuration tree (name, type, range). `where` names the spec file and key.
+void validateSetting(const std::string& key, const ojson& v, const std::string& where) {
+  const std::string shown = v.dump();
+  auto bad = [&](const std::string& expected) {
+    throw std::invalid_argument(where + ": expected " + expected + ", got " + shown);
+  };
+  if (key.find('.') != std::string::npos) {
+    validateRopParameter(key, v, where);
+  } else if (key == "algo") {
+    std::vector<std::string> names;
+    for (const auto& info : model::algorithmNames()) names.emplace_back(info.name);
+    if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
+      bad("an algorithm (" + joinNames(names) + ")");
+  } else if (key == "layers") {
+    if (!isWhole(v, 1)) bad("a positive integer");
+  } else if (key == "bits" || key == "samples" || key == "weight" || key == "seed") {
+    if (!isWhole(v, 0)) bad("a non-negative integer");
+  } else if (key == "background") {
+    std::vector<ojson> c;
+    if (v.is_array()) {
+      for (const auto& e : v) c.push_back(e);
+    } else if (v.is_string()) {  // "r,g,b", as on the command line
+      std::stringstream ss(v.get<std::string>());
+      for (std::string t; std::getline(ss, t, ',');) {
+        try {
+          size_t used = 0;
+          const double d = std::stod(t, &used);
+          c.push_back(used == t.size() ? ojson(d) : ojson(t));
+        } catch (const std::exception&) {
+          c.push_back(t);
+        }
+      }
+    }
+    bool ok = c.size() == 3;
+    for (const auto& e : c) ok = ok && e.is_number() && e.get<double>() >= 0.0 && e.get<double>() <= 1.0;
+    if (!ok) bad("[r, g, b], three linear values in [0,1]");
+  } else if (key == "format") {
+    try {
+      model::parseStorageFormat(v.is_string() ? v.get<std::string>() : shown);
+    } catch (const std::invalid_argument&) {
+      bad("a storage format (fp32, rgba8t8z32, fp16)");
+    }
+  } else if (key == "mode") {
+    if (!v.is_string() || (v.get<std::string>() != "functional" && v.get<std::string>() != "timing"))
+      bad("functional or timing");
+  } else if (key == "preset") {
+    const auto names = rop::presetNames();
+    if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
+      bad("a ROP preset (" + joinNames(names) + ")");
+  } else if (key == "config") {
+    if (!v.is_string()) bad("a ROP config file path");
+    try {
+      rop::resolveTree("", v.get<std::string>(), {});
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + ": " + e.what());
+    }
+  }
+}
+
 // Applies one setting (key = value) to s; `where` names the spec file and key for errors.
 void applySetting(Settings& s, const std::string& key, const ojson& v, const std::string& where) {
   if (key == "set") {
     if (!v.is_object()) throw std::invalid_argument(where + ": expected an object of ROP parameters");
-    for (auto it = v.begin(); it != v.end(); ++it)
+    for (auto it = v.begin(); it != v.end(); ++it) {
+      validateRopParameter(it.key(), it.value(), where + "." + it.key());
       s.sets.emplace_back(it.key(), scalarText(it.value(), where + "." + it.key()));
+    }
   } else if (key.find('.') != std::string::npos) {
+    validateSetting(key, v, where);
     s.sets.emplace_back(key, scalarText(v, where));
   } else if (kRunOptions.count(key)) {
+    validateSetting(key, v, where);
     s.options[key] = scalarText(v, where);
   } else {
     std::string known;
@@ -141,6 +241,7 @@ ojson loadSpec(const std::string& path) {
 }
 
 struct TraceEntry {
+  size_t index = 0;  // in the spec's traces list
   std::string name, path;
   std::vector<std::string> gen_args;  // empty for an existing trace
 };
@@ -161,6 +262,7 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     const ojson& t = spec["traces"][i];
     const std::string where = fmt::format("sweep spec {}: traces[{}]", specPath, i);
     TraceEntry e;
+    e.index = i;
     if (t.is_string()) {
       e.path = t.get<std::string>();
     } else if (t.is_object() && t.contains("path")) {
@@ -168,6 +270,11 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     } else if (t.is_object() && t.contains("gen")) {
       if (!t["gen"].is_string()) throw std::invalid_argument(where + ".gen: expected a scene name");
       const std::string scene = t["gen"].get<std::string>();
+      std::vector<std::string> scenes;
+      for (const auto& info : gen::sceneCatalog()) scenes.push_back(info.name);
+      if (std::find(scenes.begin(), scenes.end(), scene) == scenes.end())
+        throw std::invalid_argument(where + ".gen: unknown scene '" + scene + "' (expected " + joinNames(scenes) +
+                                    "; see `oitsim scenes`)");
       e.name = scene;
       e.gen_args = {"gen", scene};
       for (auto it = t.begin(); it != t.end(); ++it) {
@@ -353,6 +460,22 @@ std::string tailOf(const fs::path& file, size_t max_chars = 600) {
   return s;
 }
 
+// The first max_lines lines of a file (a generator's error comes first).
+std::string headOf(const fs::path& file, size_t max_lines) {
+  std::ifstream in(file);
+  std::string out, line;
+  size_t n = 0;
+  while (std::getline(in, line)) {
+    if (n == max_lines) {
+      out += "\n...";
+      break;
+    }
+    out += (n++ ? "\n" : "") + line;
+  }
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
 // Flattens a report to dotted keys. The time series (one sample per stats
 // interval) is a trace, not a metric, and stays in the point's report.json.
 void flatten(const nlohmann::json& j, const std::string& prefix, nlohmann::json& out) {
@@ -408,8 +531,71 @@ void runSweep(const SweepArgs& a) {
   const auto points = expand(spec, a.spec, traces, out);
   const std::string exe = selfExecutable();
   const unsigned jobs = a.jobs ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
-  fs::create_directories(out / "points");
+
+  std::mutex mu;
+  auto say = [&](const std::string& s) {
+    if (a.quiet) return;
+    std::lock_guard<std::mutex> lock(mu);
+    fmt::print(stderr, "{}\n", s);
+  };
+
+  // Traces first (points need them), before the plan or any point folder is
+  // written. When a generator fails nothing runs, and the folder is left as it
+  // was: the files this step made are removed (the generators' errors are in
+  // the message, so nothing is lost).
+  const bool out_existed = fs::exists(out), traces_existed = fs::exists(out / "traces");
   fs::create_directories(out / "traces");
+  std::vector<const TraceEntry*> gens;
+  for (const auto& t : traces)
+    if (!t.gen_args.empty()) gens.push_back(&t);
+  std::vector<fs::path> made;  // files of this step that were not there before
+  for (const TraceEntry* t : gens)
+    for (const fs::path& f : {fs::path(t->path), out / "traces" / (t->name + ".log"), out / "traces" / (t->name + ".err")})
+      if (!fs::exists(f)) made.push_back(f);
+  std::vector<std::string> gen_errors(gens.size());
+  std::vector<std::function<void(size_t)>> gen_tasks;
+  for (size_t i = 0; i < gens.size(); ++i)
+    gen_tasks.push_back([&, i](size_t) {
+      const TraceEntry& t = *gens[i];
+      const fs::path log = out / "traces" / (t.name + ".log"), err = out / "traces" / (t.name + ".err");
+      const Outcome o = spawnAndWait(exe, t.gen_args, log, err);
+      if (o.exit_code != 0 || !fs::exists(t.path)) {
+        std::string cmd = "oitsim";
+        for (const auto& g : t.gen_args) {
+          cmd += ' ';
+          cmd += shellQuote(g);
+        }
+        std::string text = headOf(err, 6);
+        if (text.empty()) text = headOf(log, 6);
+        if (text.empty()) text = "(no output)";
+        std::string indented;
+        for (std::istringstream in(text); std::getline(in, text);) indented += "\n    " + text;
+        gen_errors[i] = fmt::format("traces[{}] {}: `{}` {}:{}", t.index, t.name, cmd,
+                                    o.exit_code == 0 ? "wrote no trace" : fmt::format("exited with code {}", o.exit_code),
+                                    indented);
+        say(fmt::format("trace {}: `oitsim gen` failed", t.name));
+      } else {
+        say(fmt::format("trace {}: generated {} ({:.1f} s)", t.name, t.path, o.wall_seconds));
+      }
+    });
+  runAll(gen_tasks, jobs);
+  std::string gen_failures;
+  size_t gen_failed = 0;
+  for (const auto& e : gen_errors)
+    if (!e.empty()) {
+      gen_failures += "\n  " + e;
+      ++gen_failed;
+    }
+  if (gen_failed) {
+    std::error_code ec;
+    for (const auto& f : made) fs::remove(f, ec);
+    if (!traces_existed) fs::remove(out / "traces", ec);  // only if empty
+    if (!out_existed) fs::remove(out, ec);
+    throw std::runtime_error(fmt::format("sweep {}: {} of {} trace generator(s) failed, so nothing ran and {} {}:{}",
+                                         a.spec, gen_failed, gens.size(), out.string(),
+                                         out_existed ? "was left as it was" : "was not created", gen_failures));
+  }
+  fs::create_directories(out / "points");
 
   // The plan: everything collectSweep (and a Slurm task) needs.
   ojson plan;
@@ -432,34 +618,6 @@ void runSweep(const SweepArgs& a) {
   }
   reports::writeJsonReport((out / "plan.json").string(), nlohmann::json::parse(plan.dump()));
   writeText(out / "commands.txt", commands);
-
-  std::mutex mu;
-  auto say = [&](const std::string& s) {
-    if (a.quiet) return;
-    std::lock_guard<std::mutex> lock(mu);
-    fmt::print(stderr, "{}\n", s);
-  };
-
-  // Traces first (points need them), then the points.
-  std::atomic<int> gen_failed{0};
-  std::vector<std::function<void(size_t)>> gen_tasks;
-  std::vector<const TraceEntry*> gens;
-  for (const auto& t : traces)
-    if (!t.gen_args.empty()) gens.push_back(&t);
-  for (size_t i = 0; i < gens.size(); ++i)
-    gen_tasks.push_back([&, i](size_t) {
-      const TraceEntry& t = *gens[i];
-      const fs::path log = out / "traces" / (t.name + ".log");
-      const Outcome o = spawnAndWait(exe, t.gen_args, log, fs::path(log).replace_extension(".err"));
-      if (o.exit_code != 0 || !fs::exists(t.path)) {
-        ++gen_failed;
-        say(fmt::format("trace {}: `oitsim gen` failed: {}", t.name, tailOf(fs::path(log).replace_extension(".err"))));
-      } else {
-        say(fmt::format("trace {}: generated {} ({:.1f} s)", t.name, t.path, o.wall_seconds));
-      }
-    });
-  runAll(gen_tasks, jobs);
-  if (gen_failed) throw std::runtime_error(fmt::format("sweep {}: {} trace generator(s) failed", a.spec, gen_failed.load()));
 
   if (a.emit == "slurm") {
     const std::string script = fmt::format(
@@ -516,7 +674,9 @@ void runSweep(const SweepArgs& a) {
 }  // namespace
 
 // Builds DIR/results.csv and DIR/results.json from DIR/plan.json and the
-// points' folders. Returns 0 when every point has a report, 2 otherwise.
+// points' folders. A point with no status.json, stderr.txt or report.json has
+// not run (status "not run", counted apart from failures). Returns 0 when every
+// point has a report, 2 otherwise.
 int collectSweep(const std::string& dir_str, bool quiet) {
   const fs::path dir = fs::absolute(dir_str);
   if (!fs::exists(dir / "plan.json"))
@@ -531,7 +691,7 @@ int collectSweep(const std::string& dir_str, bool quiet) {
 
   ojson rows = ojson::array();
   std::set<std::string> metric_keys;
-  size_t failed = 0;
+  size_t failed = 0, not_run = 0;
   for (const auto& p : plan["points"]) {
     const std::string id = p["id"].get<std::string>();
     const fs::path pd = dir / "points" / id;
@@ -544,6 +704,7 @@ int collectSweep(const std::string& dir_str, bool quiet) {
       status = nlohmann::json::parse(s);
     }
     std::string error;
+    bool ran = true;
     nlohmann::json flat = nlohmann::json::object();
     if (fs::exists(pd / "report.json")) {
       try {
@@ -553,7 +714,7 @@ int collectSweep(const std::string& dir_str, bool quiet) {
         error = std::string("unreadable report.json: ") + e.what();
       }
     } else if (status.is_null() && !fs::exists(pd / "stderr.txt")) {
-      error = "not run";
+      ran = false;  // e.g. after --emit slurm, before its task ran: not a failure
     } else {
       error = tailOf(pd / "stderr.txt");
       if (error.empty()) error = fmt::format("exit code {} and no report.json", status.value("exit_code", -1));
@@ -562,7 +723,8 @@ int collectSweep(const std::string& dir_str, bool quiet) {
       ++failed;
       flat = nlohmann::json::object();
     }
-    row["status"] = error.empty() ? "ok" : "failed";
+    if (!ran) ++not_run;
+    row["status"] = !ran ? "not run" : error.empty() ? "ok" : "failed";
     row["error"] = error;
     row["wall_seconds"] = status.contains("wall_seconds") ? status["wall_seconds"] : nlohmann::json();
     row["axes"] = p["axes"];
@@ -590,17 +752,19 @@ int collectSweep(const std::string& dir_str, bool quiet) {
   res["schema"] = "oitsim-sweep/1";
   res["spec"] = plan["spec"];
   res["axes"] = axis_names;
-  res["summary"] = {{"points", rows.size()}, {"ok", rows.size() - failed}, {"failed", failed}};
+  const size_t ok = rows.size() - failed - not_run;
+  res["summary"] = {{"points", rows.size()}, {"ok", ok}, {"failed", failed}, {"not_run", not_run}};
   res["points"] = rows;
   writeText(dir / "results.json", res.dump(1) + "\n");
   if (!quiet) {
-    fmt::print("sweep: {} points, {} ok, {} failed; results {} and {}\n", rows.size(), rows.size() - failed, failed,
-               (dir / "results.csv").string(), (dir / "results.json").string());
+    fmt::print("sweep: {} points, {} ok, {} failed{}; results {} and {}\n", rows.size(), ok, failed,
+               not_run ? fmt::format(", {} not run", not_run) : std::string(), (dir / "results.csv").string(),
+               (dir / "results.json").string());
     for (const auto& r : rows)
       if (r["status"] == "failed")
         fmt::print("  FAILED {}: {}\n", r["id"].get<std::string>(), r["error"].get<std::string>());
   }
-  return failed ? 2 : 0;
+  return failed || not_run ? 2 : 0;
 }
 
 void addSweepCommand(CLI::App& app) {

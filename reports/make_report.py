@@ -364,7 +364,7 @@ img.plot{max-width:100%;display:block;margin:6px 0}
 .strip figure{margin:0;width:220px}
 .strip img.frame{width:220px;image-rendering:pixelated;border:1px solid #888}
 figcaption{font-size:11px}
-.ok{color:#070}.failed{color:#b00}
+.ok{color:#070}.failed{color:#b00}.notrun{color:#777}
 pre{white-space:pre-wrap;font-size:11px;background:#f6f6f6;padding:4px}
 """
 
@@ -404,17 +404,24 @@ def main():
     for p in points:
         p["_dir"] = os.path.join(a.dir, "points", p["id"])
     ok = [p for p in points if p["status"] == "ok"]
-    failed = [p for p in points if p["status"] != "ok"]
+    not_run = [p for p in points if p["status"] == "not run"]  # e.g. Slurm tasks still to come
+    failed = [p for p in points if p["status"] not in ("ok", "not run")]
 
     body = [f"<h1>oitsim sweep report</h1><p>spec <code>{html.escape(str(res.get('spec')))}</code>: "
             f"{len(points)} points, <span class='ok'>{len(ok)} ok</span>, "
-            f"<span class='failed'>{len(failed)} failed</span>. Errors are against the exact A-buffer; "
+            f"<span class='failed'>{len(failed)} failed</span>"
+            + (f", <span class='notrun'>{len(not_run)} not run</span>" if not_run else "")
+            + ". Errors are against the exact A-buffer; "
             f"frame time, DRAM and footprint come from timing-mode points (functional points show the "
             f"functional model's state traffic and state bytes instead).</p>"]
     if failed:
         body.append("<h2>Failed points</h2>")
         for p in failed:
             body.append(f"<p class='failed'>{html.escape(p['id'])}</p><pre>{html.escape(p['error'])}</pre>")
+    if not_run:
+        body.append("<h2>Points not run</h2><p class='notrun'>No status, output or report yet (rerun "
+                    "<code>oitsim report</code> when they have run): "
+                    + ", ".join(html.escape(p["id"]) for p in not_run) + "</p>")
 
     speed = speed_modes(ok)
     with open(os.path.join(a.dir, "speed.json"), "w") as f:
@@ -438,7 +445,7 @@ def main():
         tp = [p for p in ok if p["trace"] == trace]
         body.append(f"<h2>Trace {html.escape(trace)}</h2>")
         if not tp:
-            body.append("<p>No point of this trace succeeded.</p>")
+            body.append("<p>No point of this trace has succeeded.</p>")
             continue
         m0 = tp[0]["metrics"]
         body.append(f"<p>{m0.get('trace.width')} x {m0.get('trace.height')}, {m0.get('trace.fragments')} fragments "
@@ -459,7 +466,7 @@ def main():
     for p in points:
         m = p["metrics"]
         rows.append([html.escape(p["id"]), html.escape(p["trace"]),
-                     f"<span class='{p['status']}'>{p['status']}</span>"]
+                     f"<span class='{p['status'].replace(' ', '')}'>{p['status']}</span>"]
                     + [html.escape(str(p["axes"].get(ax, ""))) for ax in axes]
                     + [fmt(num(m, "image.metrics.rmse")), fmt(num(m, "image.metrics.ssim")),
                        fmt(num(m, "image.metrics.psnr")), fmt(num(m, "timing.frame_time_us")),
@@ -471,16 +478,32 @@ def main():
     page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>oitsim sweep report</title>"
             f"<style>{CSS}</style></head><body>\n" + CHECK + "\n".join(body) + "\n</body></html>\n")
     tmp = out + ".tmp"
-    with open(tmp, "w") as f:
-        f.write(page)
-    os.replace(tmp, out)
+    try:
+        with open(tmp, "w") as f:
+            f.write(page)
+        os.replace(tmp, out)
+    except OSError:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
     if not a.quiet:
-        print(f"report {out} ({len(page) // 1024} KiB, {len(points)} points)")
+        print(f"report {out} ({len(page) // 1024} KiB, {len(points)} points: {len(ok)} ok, {len(failed)} failed, "
+              f"{len(not_run)} not run)")
         if speed:
             for mode, v in sorted(speed["modes"].items()):
                 print(f"speed  {mode}: max cycle error {v['max_cycle_err_pct']:.3f} %, "
                       f"min speed-up {v['min_speedup']:.1f}x: goal {'met' if v['goal_met'] else 'not met'}")
 
 
+def run():
+    """main() with I/O errors as one line on stderr (exit 1), not a traceback."""
+    try:
+        return main()
+    except OSError as e:
+        what = f"{e.filename}: {e.strerror}" if e.filename else str(e)
+        print(f"make_report.py: error: cannot read or write {what}", file=sys.stderr)
+        return 1
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run())

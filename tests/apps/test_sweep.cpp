@@ -128,9 +128,11 @@ TEST_F(Sweep, SlurmEmitsOneTaskPerPointAndReportMergesWhatRan) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json res = readJson(out + "/results.json");
   EXPECT_EQ(res["summary"]["ok"].get<int>(), 1);
-  EXPECT_EQ(res["summary"]["failed"].get<int>(), 17);
+  EXPECT_EQ(res["summary"]["failed"].get<int>(), 0);  // the others have not run: not failures
+  EXPECT_EQ(res["summary"]["not_run"].get<int>(), 17);
   EXPECT_EQ(res["points"][3]["status"], "ok");
-  EXPECT_EQ(res["points"][0]["error"], "not run");
+  EXPECT_EQ(res["points"][0]["status"], "not run");
+  EXPECT_EQ(res["points"][0]["error"], "");
 }
 
 TEST_F(Sweep, ReportIsSelfContainedAndRendersInHeadlessChromium) {
@@ -186,18 +188,20 @@ TEST_F(Sweep, ReportIsSelfContainedAndRendersInHeadlessChromium) {
 
 TEST(SweepErrors, FailedPointIsReportedAndTheSweepGoesOn) {
   TempDir d("sweep_fail");
-  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
-    "base": {"mode": "functional"}, "axes": {"algo": ["mlab", "nosuchalgo", "hybrid"]}})");
+  // Every setting is valid; the second trace is not a trace, so its points fail when they run.
+  writeText(d.file("broken.oitt"), "not a trace\n");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}, "broken.oitt"],
+    "base": {"mode": "functional"}, "axes": {"algo": ["mlab", "hybrid"]}})");
   CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o") + " -j 2");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("3 points, 2 ok, 1 failed"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("FAILED 0001-glass-nosuchalgo"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("4 points, 2 ok, 2 failed;"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("FAILED 0002-broken-mlab"), std::string::npos) << r.output;
   const nlohmann::json res = readJson(d.file("o") + "/results.json");
-  EXPECT_EQ(res["points"][1]["status"], "failed");
-  EXPECT_NE(res["points"][1]["error"].get<std::string>().find("nosuchalgo"), std::string::npos)
-      << res["points"][1]["error"];
-  EXPECT_EQ(res["points"][2]["status"], "ok");
-  EXPECT_TRUE(fs::exists(d.file("o") + "/points/0002-glass-hybrid/report.json"));
+  EXPECT_EQ(res["points"][2]["status"], "failed");
+  EXPECT_NE(res["points"][2]["error"].get<std::string>().find("broken.oitt"), std::string::npos)
+      << res["points"][2]["error"];
+  EXPECT_EQ(res["points"][1]["status"], "ok");
+  EXPECT_TRUE(fs::exists(d.file("o") + "/points/0001-glass-hybrid/report.json"));
 }
 
 TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
@@ -231,9 +235,84 @@ TEST(SweepErrors, BadRopParameterStopsTheSweepBeforeAnyPointRuns) {
     "axes": {"sim.quantum_cycle": [1, 1000]}})");
   CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o"));
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("s.json: point 0000-glass-1: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("sim.quantum_cycle"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-glass-1/report.json"));
+  EXPECT_NE(r.output.find("s.json: axes.sim.quantum_cycle[0]: sim.quantum_cycle = 1: unknown property "
+                          "'sim.quantum_cycle'; did you mean 'sim.quantum_cycles'?"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o")));
+}
+
+// Every value of base and of every axis is checked before anything is created
+// or run (reports/SWEEP.md); the error names the spec file, the key and the value.
+TEST(SweepErrors, EveryAxisValueIsCheckedBeforeAnythingRuns) {
+  TempDir d("sweep_values");
+  const std::map<std::string, std::string> cases = {
+      {R"("axes": {"layers": [2, "four"]})", R"(s.json: axes.layers[1]: expected a positive integer, got "four")"},
+      {R"("axes": {"layers": [0]})", R"(s.json: axes.layers[0]: expected a positive integer, got 0)"},
+      {R"("axes": {"algo": ["mlab", "nosuch"]})",
+       R"(s.json: axes.algo[1]: expected an algorithm (abuffer, alpha, mlab, )"},
+      {R"("axes": {"background": [[0, 0, 0], [2, 0, 0]]})",
+       R"(s.json: axes.background[1]: expected [r, g, b], three linear values in [0,1], got [2,0,0])"},
+      {R"("base": {"background": [0.5, 0.5]})",
+       R"(s.json: base.background: expected [r, g, b], three linear values in [0,1], got [0.5,0.5])"},
+      {R"("axes": {"format": ["fp8"]})",
+       R"(s.json: axes.format[0]: expected a storage format (fp32, rgba8t8z32, fp16), got "fp8")"},
+      {R"("axes": {"mode": ["fast"]})", R"(s.json: axes.mode[0]: expected functional or timing, got "fast")"},
+      {R"("axes": {"preset": ["tpu"]})", R"(s.json: axes.preset[0]: expected a ROP preset (igpu, dgpu), got "tpu")"},
+      {R"("axes": {"lock.capacity": [0, 4]})", R"(s.json: axes.lock.capacity[0]: lock.capacity = 0: )"},
+      {R"("axes": {"speed": [{"label": "a", "mode": "functional"}, {"label": "b", "set": {"lock.capacity": 0}}]})",
+       R"(s.json: axes.speed[1].set.lock.capacity: lock.capacity = 0: )"},
+  };
+  for (const auto& [spec, message] : cases) {
+    const bool has_base = spec.find("\"base\"") != std::string::npos;
+    writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}], )" +
+                                    std::string(has_base ? "" : R"("base": {"mode": "functional"}, )") + spec + "}");
+    CliResult r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("o"));
+    EXPECT_EQ(r.exit_code, 1) << spec << "\n" << r.output;
+    EXPECT_NE(r.output.find("oitsim: error: sweep spec " + d.file(message)), std::string::npos)
+        << spec << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(d.file("o"))) << spec << ": nothing may be created before the spec is checked";
+  }
+}
+
+TEST(SweepErrors, UnknownSceneIsASpecErrorAndCreatesNothing) {
+  TempDir d("sweep_scene");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "nosuch"}], "axes": {"algo": ["mlab"]}})");
+  CliResult r = runOitsim("sweep -q " + d.file("s.json") + " -o " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("oitsim: error: sweep spec " + d.file("s.json") +
+                          ": traces[0].gen: unknown scene 'nosuch' (expected particles, "),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o")));
+}
+
+// A generator that fails when it runs: its error is shown (even with -q), nothing
+// runs, and the sweep folder is left as it was (not created, or untouched).
+TEST(SweepErrors, FailedGeneratorShowsItsErrorAndLeavesNoHalfMadeFolder) {
+  TempDir d("sweep_gen");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48},
+    {"gen": "glass", "name": "bad", "widht": 64}], "axes": {"algo": ["mlab"]}})");
+  const std::string o = d.file("o");
+  CliResult r = runOitsim("sweep -q " + d.file("s.json") + " -o " + o + " -j 1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("oitsim: error: sweep " + d.file("s.json") + ": 1 of 2 trace generator(s) failed, so "
+                          "nothing ran and " + o + " was not created:\n  traces[1] bad: `oitsim gen glass --widht 64 "
+                          "-o " + o + "/traces/bad.oitt` exited with code "),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("\n    The following arguments were not expected: 64 --widht"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(o)) << "a failed generator must not leave a half-made sweep folder";
+
+  // An existing folder keeps what it had and gets nothing new.
+  fs::create_directories(o);
+  writeText(o + "/keep.txt", "mine\n");
+  r = runOitsim("sweep -q " + d.file("s.json") + " -o " + o);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(o + " was left as it was:\n  traces[1] bad: "), std::string::npos) << r.output;
+  std::vector<std::string> left;
+  for (const auto& e : fs::recursive_directory_iterator(o)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"keep.txt"});
 }
 
 // The report's depth-complexity heatmap: transparent fragments per pixel.

@@ -1,0 +1,129 @@
+// `oitsim report` on the real executable: a bad --out is one clear error before
+// anything is written, a failure of reports/make_report.py is one line and its
+// exit code (not a traceback or a raw wait status), and points that have not
+// run (after --emit slurm) are counted as "not run", apart from failures.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+
+#include "CliRunner.hpp"
+
+namespace oit::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool haveMatplotlib() {
+  return std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") == 0;
+}
+
+// One small sweep (two functional points on a 64x48 trace), run once.
+class Report : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir("report");
+    writeText(dir_->file("spec.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+      "base": {"mode": "functional"}, "axes": {"algo": ["mlab", "hybrid"]}})");
+    result_ = new CliResult(runOitsim("sweep -q " + dir_->file("spec.json") + " --out " + dir_->file("sw") + " -j 2"));
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete dir_;
+  }
+  // A fresh copy of the sweep folder, so tests that break it stay apart.
+  static std::string copyOfSweep(const std::string& name) {
+    const std::string to = dir_->file(name);
+    fs::remove_all(to);
+    fs::copy(dir_->file("sw"), to, fs::copy_options::recursive);
+    return to;
+  }
+  static TempDir* dir_;
+  static CliResult* result_;
+};
+TempDir* Report::dir_ = nullptr;
+CliResult* Report::result_ = nullptr;
+
+TEST_F(Report, UnwritableOutIsOneErrorNamingTheOptionBeforeAnythingRuns) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  const std::string sw = copyOfSweep("unwritable");
+  fs::remove(sw + "/results.json");
+  CliResult r = runOitsim("report " + sw + " -o /proc/x/r.html");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: report: --out /proc/x/r.html: folder /proc/x does not exist\n");
+  EXPECT_FALSE(fs::exists(sw + "/results.json")) << "a bad --out must stop the report before it writes anything";
+
+  // An existing folder is not an HTML file.
+  r = runOitsim("report " + sw + " --out " + dir_->file("unwritable"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: report: --out " + dir_->file("unwritable") +
+                          ": is a folder (expected an HTML file path)\n");
+}
+
+TEST_F(Report, GeneratorIoErrorIsOneLineAndTheRealExitCode) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";
+  const std::string sw = copyOfSweep("ioerror");
+  fs::create_directories(sw + "/speed.json");  // the script cannot write its speed.json
+  CliResult r = runOitsim("report " + sw);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output.find("Traceback"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("exit status"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("make_report.py: error: cannot read or write " + sw + "/speed.json: Is a directory\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("oitsim: error: report: " + std::string(OITSIM_SOURCE_DIR) +
+                          "/reports/make_report.py failed (exit code 1); " + sw + "/report.html was not written\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(lines(r.output).size(), 2u) << r.output;
+  EXPECT_FALSE(fs::exists(sw + "/report.html"));
+  EXPECT_FALSE(fs::exists(sw + "/report.html.tmp"));
+}
+
+TEST_F(Report, PointsNotRunAreCountedApartFromFailures) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  const std::string out = dir_->file("slurm");
+  CliResult r = runOitsim("sweep " + dir_->file("spec.json") + " --out " + out + " --emit slurm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";
+  r = runOitsim("report " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 points: 0 ok, 0 failed, 2 not run"), std::string::npos) << r.output;
+  nlohmann::json res = readJson(out + "/results.json");
+  EXPECT_EQ(res["summary"], nlohmann::json({{"points", 2}, {"ok", 0}, {"failed", 0}, {"not_run", 2}}));
+  for (const auto& p : res["points"]) {
+    EXPECT_EQ(p["status"], "not run") << p["id"];
+    EXPECT_EQ(p["error"], "") << p["id"];
+  }
+  auto csv = lines(readText(out + "/results.csv"));
+  ASSERT_EQ(csv.size(), 3u);
+  EXPECT_EQ(csvSplit(csv[1])[2], "not run");
+  std::string page = readText(out + "/report.html");
+  EXPECT_NE(page.find("<span class='notrun'>2 not run</span>"), std::string::npos);
+  EXPECT_EQ(page.find("<h2>Failed points</h2>"), std::string::npos);
+
+  // Point 0 runs (as its Slurm task would); point 1 fails: its stderr, no report.
+  const auto cmds = lines(readText(out + "/commands.txt"));
+  ASSERT_EQ(cmds.size(), 2u);
+  writeText(dir_->file("task0.sh"), cmds[0] + "\n");
+  ASSERT_EQ(std::system(("bash " + dir_->file("task0.sh")).c_str()), 0) << cmds[0];
+  const std::string p1 = res["points"][1]["id"].get<std::string>();
+  fs::create_directories(out + "/points/" + p1);
+  writeText(out + "/points/" + p1 + "/stderr.txt", "oitsim: error: out of memory\n");
+  r = runOitsim("report -q " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  res = readJson(out + "/results.json");
+  EXPECT_EQ(res["summary"], nlohmann::json({{"points", 2}, {"ok", 1}, {"failed", 1}, {"not_run", 0}}));
+  EXPECT_EQ(res["points"][0]["status"], "ok");
+  EXPECT_EQ(res["points"][1]["status"], "failed");
+  EXPECT_EQ(res["points"][1]["error"], "oitsim: error: out of memory");
+  page = readText(out + "/report.html");
+  EXPECT_NE(page.find("<h2>Failed points</h2>"), std::string::npos);
+  EXPECT_EQ(page.find("not run"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace oit::test
