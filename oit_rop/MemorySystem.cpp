@@ -68,8 +68,11 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   cl_ticks_ = cyclesToTicks(cfg.cl * cfg.tck_ns * cycles_per_ns, kTickShift);
   trcd_ticks_ = cyclesToTicks(cfg.trcd * cfg.tck_ns * cycles_per_ns, kTickShift);
   trp_ticks_ = cyclesToTicks(cfg.trp * cfg.tck_ns * cycles_per_ns, kTickShift);
-  burst_ticks_ = cyclesToTicks(cfg.burst_bytes / bytesPerCyclePerChannel(), kTickShift);
-  require(burst_ticks_ >= 1, "bandwidth too high for the tick resolution");
+  const double burst_cycles = cfg.burst_bytes / bytesPerCyclePerChannel();
+  // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
+  require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
+  burst_ticks_ = cyclesToTicks(burst_cycles, kTickShift);
+  require(burst_ticks_ >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
 
   map_.burst.set(cfg.burst_bytes);
   map_.interleave.set(cfg.interleave_bytes);

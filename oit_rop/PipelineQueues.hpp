@@ -103,14 +103,19 @@ class TimingWheel {
   size_t count_ = 0;
 };
 
-// "rate per clock" as integer credits in 1/256 units, accumulated lazily by
+// "rate per clock" as integer credits in 1/2^20 units, accumulated lazily by
 // elapsed cycles: the same answers whether or not idle cycles are skipped.
+// The rate is the requested one rounded to 2^-20 per clock: within 0.05 % at
+// the smallest configurable rate, 0.001 per clock (CONFIG.md). Overflow-free
+// up to kMaxPerClock: credit <= cap <= 2^30 and rate * dt < rate * cap <= 2^60.
 class RateLimiter {
  public:
-  static constexpr int64_t kOne = 256;
-  static constexpr unsigned kShift = 8;  // kOne = 1 << kShift
+  static constexpr unsigned kShift = 20;
+  static constexpr int64_t kOne = int64_t(1) << kShift;
+  static constexpr double kMaxPerClock = 1024;
   explicit RateLimiter(double per_clock = 1.0) {
-    if (!(per_clock > 0)) throw std::invalid_argument("rate per clock must be > 0");
+    if (!(per_clock > 0) || !(per_clock <= kMaxPerClock))
+      throw std::invalid_argument("rate per clock must be in (0, 1024]");
     rate_ = std::max<int64_t>(1, int64_t(per_clock * kOne + 0.5));
     cap_ = std::max(rate_, kOne);
     credit_ = cap_;

@@ -56,6 +56,26 @@ TEST(MemorySystem, IgpuPresetConversions) {
   EXPECT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 84u);
 }
 
+// A bandwidth too low for the tick arithmetic is refused as such (a vanishing
+// bandwidth used to overflow to 0 ticks and be reported as "too high"; the
+// configuration's ranges and its burst-time check keep runs far from both ends).
+TEST(MemorySystem, RefusesBandwidthsTheTicksCannotHold) {
+  auto messageOf = [](double gbps, double mhz) {
+    DramConfig c = roundConfig(1);
+    c.channel_gbps = gbps;
+    try {
+      MemorySystem m(c, mhz);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(messageOf(1e-300, kRoundMhz).find("channel_gbps too low"), std::string::npos) << messageOf(1e-300, kRoundMhz);
+  EXPECT_NE(messageOf(1e-12, kRoundMhz).find("channel_gbps too low"), std::string::npos);
+  EXPECT_EQ(messageOf(0.1, 1.0), "no error");  // the configurable extremes
+  EXPECT_EQ(messageOf(10000, 10000), "no error");
+}
+
 TEST(MemorySystem, SingleReadLatencyClosedBankRowHitAndRowMiss) {
   MemorySystem m(roundConfig(1), kRoundMhz);
   // Nothing open yet: controller + tRCD + CL + one burst.

@@ -49,6 +49,27 @@ TEST(PipelineQueues, RateLimiterIsExactForFractionalRatesWhateverTheSkips) {
   EXPECT_EQ(two.available(0), 2u);
 }
 
+// Slow rates are kept to 2^-20 per clock: 0.001 and 0.01 per clock pass 1 +
+// 1000 tokens in 10^6 and 10^5 cycles (with 1/256 units both were rounded up,
+// to 3907 and 1172 tokens: 0.001 and 0.0001 per clock gave the same frame).
+TEST(PipelineQueues, RateLimiterKeepsSlowRates) {
+  for (const auto& [rate, cycles] : {std::pair{0.001, Cycle(1000000)}, std::pair{0.01, Cycle(100000)}}) {
+    RateLimiter r(rate);
+    unsigned taken = 0;
+    for (Cycle c = 0; c < cycles; c = r.nextAvailable(c))
+      while (r.available(c) > 0) r.take(), ++taken;
+    // 1 at cycle 0 (full bucket) + one per 1/rate cycles, to 2^-20 per clock
+    EXPECT_NEAR(double(taken), 1.0 + rate * double(cycles), 1.0) << rate;
+  }
+  // The fastest rate after a long idle span: capped credit, no overflow.
+  RateLimiter fast(RateLimiter::kMaxPerClock);
+  EXPECT_EQ(fast.available(0), 1024u);
+  for (int i = 0; i < 1024; ++i) fast.take();
+  EXPECT_EQ(fast.available(Cycle(1) << 40), 1024u);
+  EXPECT_THROW(RateLimiter(0.0), std::invalid_argument);
+  EXPECT_THROW(RateLimiter(1025.0), std::invalid_argument);
+}
+
 TEST(TimingStats, AccountsBalanceAndPad) {
   StageAccounts a;
   a[Stage::PixelLock].add(StageStatus::busy(), 10);
