@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 namespace oit::rop {
@@ -161,26 +162,20 @@ Cycle RopPartition::missRetry() {
 
 Cycle RopPartition::pruneMisses() {
   // Fills completed by now_ can never be the next event again (now_ only grows).
-  Cycle c = kNever;
-  size_t w = 0;
-  for (Cycle m : misses_)
-    if (m > now_) {
-      misses_[w++] = m;
-      c = std::min(c, m);
-    }
-  misses_.resize(w);
-  return c;
+  // misses_ is a min-heap: the completed ones are on top.
+  while (!misses_.empty() && misses_.front() <= now_) {
+    std::pop_heap(misses_.begin(), misses_.end(), std::greater<>());
+    misses_.pop_back();
+  }
+  return misses_.empty() ? kNever : misses_.front();
 }
 
 void RopPartition::recordMiss(Cycle ready) {
-  // Without refusals missRetry() never runs: drop completed fills here too, so
-  // the list stays about as long as the fills in flight instead of growing
-  // with every miss of the frame.
-  if (misses_.size() >= misses_cap_) {
-    pruneMisses();
-    misses_cap_ = std::max<size_t>(64, 2 * misses_.size());
-  }
+  // Pruned here too (without refusals missRetry() never runs), so the heap
+  // holds about the fills in flight, not every miss of the frame.
+  pruneMisses();
   misses_.push_back(ready);
+  std::push_heap(misses_.begin(), misses_.end(), std::greater<>());
 }
 
 bool RopPartition::transparentStep() {

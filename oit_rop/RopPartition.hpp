@@ -143,8 +143,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
-  std::vector<Cycle> misses_;                // outstanding fill completions (and some completed)
-  size_t misses_cap_ = 64;                   // prune misses_ when it reaches this length
+  std::vector<Cycle> misses_;                // outstanding fill completions, a min-heap
   unsigned cache_ports_;
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
