@@ -32,6 +32,7 @@ struct RunArgs {
   std::string preset = "igpu", config_file, vcd;
   std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
+  bool width_given = false, height_given = false;
   AlgorithmParams params;
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   bool quiet = false;
@@ -111,12 +112,42 @@ void printTimingSummary(const nlohmann::json& j) {
              l["peak_occupancy"].get<uint64_t>(), 100.0 * ca["hit_rate"].get<double>());
 }
 
-void runReplay(RunArgs& a) {
+// Every option is checked before the trace is read or anything is written.
+void checkOptions(const RunArgs& a) {
+  if (a.mode != "functional" && a.mode != "timing")
+    throw std::invalid_argument("--mode: expected functional or timing, got '" + a.mode + "'");
   if (a.background.size() != 3)
     throw std::invalid_argument("--background: expected r,g,b (three linear values in [0,1])");
   for (float c : a.background)
     if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("--background: each channel must be in [0,1]");
+  if (a.width_given && a.width == 0)
+    throw std::invalid_argument("--width 0: expected a frame width of at least 1 pixel");
+  if (a.height_given && a.height == 0)
+    throw std::invalid_argument("--height 0: expected a frame height of at least 1 pixel");
+  std::error_code ec;
+  const fs::file_status st = fs::status(a.out, ec);
+  if (fs::exists(st) && !fs::is_directory(st))
+    throw std::invalid_argument(fmt::format("--out {}: exists and is not a directory", a.out));
+  if (!a.vcd.empty() && a.mode != "timing")
+    throw std::invalid_argument(
+        fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
+}
+
+void runReplay(RunArgs& a) {
+  checkOptions(a);
   a.params.format = model::parseStorageFormat(a.format);
+  const bool timing = a.mode == "timing";
+  // Resolve and validate the ROP configuration before any work, whatever the
+  // mode, so a bad --preset, --config or --set fails at once and never passes
+  // silently in functional mode (which does not use it).
+  const rop::ConfigTree tree = rop::resolveTree(a.preset, a.config_file, a.sets);
+  if (!a.vcd.empty()) {
+    try {
+      rop::checkVcdWritable(a.vcd);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("--vcd {}: {}", a.vcd, e.what()));
+    }
+  }
 
   OpenOptions opts;
   opts.width = a.width;
@@ -128,12 +159,11 @@ void runReplay(RunArgs& a) {
 
   // A stale report in the output folder must never pass for this run's.
   const fs::path out(a.out);
-  fs::remove(out / "report.json");
-
-  const bool timing = a.mode == "timing";
-  // Resolve the ROP configuration before any work, so a bad --set fails at once.
-  std::optional<rop::ConfigTree> tree;
-  if (timing) tree = rop::resolveTree(a.preset, a.config_file, a.sets);
+  std::error_code ec;
+  fs::remove(out / "report.json", ec);
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    throw std::invalid_argument(
+        fmt::format("--out {}: cannot remove the old report.json: {}", a.out, ec.message()));
 
   TimedRender run;
   nlohmann::json timing_stats;
@@ -143,7 +173,7 @@ void runReplay(RunArgs& a) {
     to.clear_colour = clear;
     to.vcd_path = a.vcd;
     to.progress = [&](double fraction, const std::string& what) { progress.update(fraction, what); };
-    rop::TimingResult t = rop::runTiming(*src, *algo, tree->config(), to);
+    rop::TimingResult t = rop::runTiming(*src, *algo, tree.config(), to);
     progress.finish();
     run.result.image = std::move(t.image);
     run.result.counts = t.counts;
@@ -208,7 +238,7 @@ void runReplay(RunArgs& a) {
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
   if (timing) {
-    j["config"]["rop"] = tree->toJson();
+    j["config"]["rop"] = tree.toJson();
     // The timing model's sections; its fragment and memory sections extend the
     // functional ones (same outcome counts: the functional insert decides them).
     for (auto it = timing_stats.begin(); it != timing_stats.end(); ++it) {
@@ -218,7 +248,7 @@ void runReplay(RunArgs& a) {
         j[it.key()] = it.value();
       }
     }
-    if (!a.vcd.empty()) j["files"]["vcd"] = a.vcd;
+    if (!a.vcd.empty()) j["files"]["vcd"] = rop::vcdFilePath(a.vcd);  // SystemC appends .vcd
   }
   reports::requireFinite(j);
 
@@ -234,7 +264,7 @@ void runReplay(RunArgs& a) {
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
              c.fragments_in, c.opaque, h.draws.size());
   fmt::print("algorithm   {} (k={}, format {}), mode {}{}, {} pass(es) over the trace\n", a.algo, a.params.layers,
-             model::toString(a.params.format), a.mode, timing ? ", preset " + tree->config().preset : "",
+             model::toString(a.params.format), a.mode, timing ? ", preset " + tree.config().preset : "",
              c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
@@ -264,11 +294,13 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--algo,-a", a->algo, "OIT algorithm: " + algos)->capture_default_str();
   cmd->add_option("--mode", a->mode, "timing (SystemC ROP: cycles, stalls, DRAM) or functional (image only, faster)")
       ->capture_default_str();
-  cmd->add_option("--preset", a->preset, "ROP preset: igpu or dgpu (timing mode)")->capture_default_str();
-  cmd->add_option("--config", a->config_file, "JSON file of ROP parameters, applied over the preset (timing mode)");
+  cmd->add_option("--preset", a->preset, "ROP preset: igpu or dgpu (used in timing mode, validated in both)")
+      ->capture_default_str();
+  cmd->add_option("--config", a->config_file,
+                  "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
   cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode)");
+  cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode only; the folder must exist)");
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
   cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b")->capture_default_str();
@@ -279,16 +311,15 @@ void addRunCommand(CLI::App& app) {
       ->delimiter(',')
       ->expected(3)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  cmd->add_option("--width", a->width, "Frame width of a CSV trace without a width comment");
-  cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment");
+  CLI::Option* width = cmd->add_option("--width", a->width, "Frame width of a CSV trace without a width comment (>= 1)");
+  CLI::Option* height =
+      cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (>= 1)");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
-  cmd->callback([a] {
+  cmd->callback([a, width, height] {
     a->command_line = commandLine();
-    if (a->mode == "functional" || a->mode == "timing") {
-      runReplay(*a);
-    } else {
-      throw std::invalid_argument("--mode: expected functional or timing, got '" + a->mode + "'");
-    }
+    a->width_given = width->count() > 0;
+    a->height_given = height->count() > 0;
+    runReplay(*a);
   });
 }
 

@@ -124,7 +124,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 const std::vector<Property>& registry() {
   using R = RopConfig;
   static const std::vector<Property> props = {
-      real("clock.core_mhz", &R::clock, &ClockConfig::core_mhz, 0, true, 10000, "MHz",
+      real("clock.core_mhz", &R::clock, &ClockConfig::core_mhz, 1, false, 10000, "MHz",
            "ROP / core clock; every cycle count is in this clock"),
 
       integer("partitions.count", &R::partitions, &PartitionConfig::count, 1, 64, "",
@@ -134,7 +134,7 @@ const std::vector<Property>& registry() {
       integer("partitions.tile_height", &R::partitions, &PartitionConfig::tile_height, 1, 64, "pixels",
               "screen tile height", true),
 
-      real("input.fragments_per_clock", &R::input, &InputConfig::fragments_per_clock, 0, true, 1024,
+      real("input.fragments_per_clock", &R::input, &InputConfig::fragments_per_clock, 0.001, false, 1024,
            "fragments/clock", "fragments entering the pixel shader per clock, per partition"),
       enumeration("input.latency_model", &R::input, &InputConfig::latency_model, {"fixed", "uniform"},
                   "pixel-shader latency: fixed = latency_min, uniform in [latency_min, latency_max]"),
@@ -176,13 +176,13 @@ const std::vector<Property>& registry() {
               "latency of one insert"),
       integer("alu.row_latency", &R::alu, &AluConfig::row_latency, 0, 10000, "cycles",
               "extra latency per array row read-modify-written"),
-      real("alu.fp16_rate", &R::alu, &AluConfig::fp16_rate, 0, true, 1, "",
+      real("alu.fp16_rate", &R::alu, &AluConfig::fp16_rate, 0.001, false, 1, "",
            "fp16-row blend throughput relative to 8-bit rows [inferred]"),
-      real("alu.fp32_rate", &R::alu, &AluConfig::fp32_rate, 0, true, 1, "",
+      real("alu.fp32_rate", &R::alu, &AluConfig::fp32_rate, 0.001, false, 1, "",
            "fp32-row blend throughput relative to 8-bit rows [inferred]"),
 
       integer("dram.channels", &R::dram, &DramConfig::channels, 1, 64, "", "DRAM channels (shared by all partitions)"),
-      real("dram.channel_gbps", &R::dram, &DramConfig::channel_gbps, 0, true, 10000, "GB/s",
+      real("dram.channel_gbps", &R::dram, &DramConfig::channel_gbps, 0.1, false, 10000, "GB/s",
            "peak bandwidth per channel"),
       real("dram.tck_ns", &R::dram, &DramConfig::tck_ns, 0, true, 100, "ns", "DRAM command clock period"),
       integer("dram.cl", &R::dram, &DramConfig::cl, 1, 255, "tCK", "CAS latency"),
@@ -211,7 +211,8 @@ const std::vector<Property>& registry() {
               "the simulator jumps over cycles where nothing can move"),
 
       integer("sim.quantum_cycles", &R::sim, &SimConfig::quantum_cycles, 1, 1000000000, "cycles",
-              "tlm_quantumkeeper quantum (partitions may run this far ahead)"),
+              "tlm_quantumkeeper quantum: partitions may run this far apart, which changes how their DRAM "
+              "requests interleave (1 = lockstep; DESIGN.md)"),
   };
   return props;
 }
@@ -430,17 +431,55 @@ void ConfigTree::applyJson(const nlohmann::json& j, const std::string& origin) {
   walk(j, "");
 }
 
-void ConfigTree::loadJson(const std::string& file) {
+namespace {
+
+// Reads a config file (JSON, comments allowed). Every error names the file:
+// syntax errors with nlohmann's line and column, number overflow (1e400) and a
+// key repeated within one object (JSON parsers keep the last silently).
+nlohmann::json readConfigFile(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
-  nlohmann::json j;
+  struct Level {
+    bool object = false;
+    std::vector<std::string> keys;
+    std::string key;  // the current key (objects)
+  };
+  std::vector<Level> stack;
+  auto where = [&](const std::string& key) {
+    std::string path;
+    for (size_t i = 0; i + 1 < stack.size(); ++i)
+      if (stack[i].object) path += stack[i].key + "/";
+    return path + key;
+  };
+  const nlohmann::json::parser_callback_t cb = [&](int, nlohmann::json::parse_event_t ev, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (ev == E::object_start || ev == E::array_start) {
+      stack.push_back(Level{ev == E::object_start, {}, {}});
+    } else if (ev == E::object_end || ev == E::array_end) {
+      if (!stack.empty()) stack.pop_back();
+    } else if (ev == E::key && !stack.empty() && parsed.is_string()) {
+      Level& top = stack.back();
+      const std::string key = parsed.get<std::string>();
+      if (std::find(top.keys.begin(), top.keys.end(), key) != top.keys.end())
+        throw std::invalid_argument(fmt::format(
+            "{}: key '{}' appears twice in the same JSON object (the second would silently replace the first); "
+            "give each key once",
+            file, where(key)));
+      top.keys.push_back(key);
+      top.key = key;
+    }
+    return true;
+  };
   try {
-    j = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::parse_error& e) {
+    return nlohmann::json::parse(in, cb, true, /*ignore_comments=*/true);
+  } catch (const nlohmann::json::exception& e) {  // parse_error (with line, column), out_of_range.406 ...
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
   }
-  applyJson(j, file);
 }
+
+}  // namespace
+
+void ConfigTree::loadJson(const std::string& file) { applyJson(readConfigFile(file), file); }
 
 void ConfigTree::validate() const {
   std::vector<std::string> errs;
@@ -463,6 +502,16 @@ void ConfigTree::validate() const {
   if (c.alu.fp32_rate > c.alu.fp16_rate)
     errs.push_back(fmt::format("alu.fp32_rate ({}) > alu.fp16_rate ({}): wider rows cannot blend faster",
                                c.alu.fp32_rate, c.alu.fp16_rate));
+  // The DRAM model keeps time in 2^-16 core cycles (MEMORY.md): a burst must
+  // take at least one such tick on its channel's bus.
+  if (c.clock.core_mhz > 0 && c.dram.channel_gbps > 0) {
+    const double burst_cycles = double(c.dram.burst_bytes) * c.clock.core_mhz / (c.dram.channel_gbps * 1000.0);
+    if (!(burst_cycles >= 1.0 / 65536))
+      errs.push_back(fmt::format(
+          "dram.channel_gbps ({} GB/s) at clock.core_mhz ({} MHz): a {}-byte burst takes {:.3g} core cycles, below "
+          "the DRAM model's resolution of 2^-16 cycles; lower the bandwidth or raise the clock",
+          c.dram.channel_gbps, c.clock.core_mhz, c.dram.burst_bytes, burst_cycles));
+  }
   // Single-field limits hold by construction via set(); recheck in case the
   // struct was edited directly (a programmatic caller).
   for (const auto& p : registry()) {
@@ -531,13 +580,7 @@ ConfigTree resolveTree(const std::string& preset, const std::string& config_file
   std::string name = preset;
   nlohmann::json file_json;
   if (!config_file.empty()) {
-    std::ifstream in(config_file);
-    if (!in) throw std::invalid_argument(fmt::format("{}: cannot open config file", config_file));
-    try {
-      file_json = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", config_file, e.what()));
-    }
+    file_json = readConfigFile(config_file);
     // A file naming its preset supplies it when --preset was not given.
     if (name.empty() && file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
       name = file_json["preset"].get<std::string>();

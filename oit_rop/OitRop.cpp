@@ -1,6 +1,10 @@
 #include "oit_rop/OitRop.hpp"
 
 #include <fmt/format.h>
+#include <sysc/tracing/sc_tracing_ids.h>
+
+#include <cmath>
+#include <utility>
 
 namespace oit::rop {
 
@@ -20,7 +24,19 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
     std::string base = vcd_path;
     if (base.size() > 4 && base.compare(base.size() - 4, 4, ".vcd") == 0) base.resize(base.size() - 4);
     vcd_ = sc_core::sc_create_vcd_trace_file(base.c_str());
-    vcd_->set_time_unit(1.0, sc_core::SC_NS);
+    // The time unit is the kernel's resolution (1 ps by default), which every
+    // kernel time is a multiple of: a coarser unit (1 ns) cannot represent a
+    // 1150 MHz clock's edges and SystemC warns (W713) at every sample.
+    sc_core::sc_report_handler::set_actions(sc_core::SC_ID_TRACING_TIMESCALE_UNIT_, sc_core::SC_DO_NOTHING);
+    const double res_s = sc_core::sc_get_time_resolution().to_seconds();
+    const std::pair<double, sc_core::sc_time_unit> units[] = {
+        {1.0, sc_core::SC_SEC}, {1e-3, sc_core::SC_MS}, {1e-6, sc_core::SC_US},
+        {1e-9, sc_core::SC_NS}, {1e-12, sc_core::SC_PS}, {1e-15, sc_core::SC_FS}};
+    for (const auto& [unit_s, u] : units)
+      if (unit_s <= res_s * (1.0 + 1e-9)) {
+        vcd_->set_time_unit(std::round(res_s / unit_s), u);
+        break;
+      }
     sc_core::sc_trace(vcd_, tr_dram_bytes_, "dram_bytes_per_interval");
     sc_core::sc_trace(vcd_, tr_waiters_, "lock_waiters");
     for (unsigned i = 0; i < n; ++i)

@@ -2,7 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <tlm>
@@ -29,6 +34,40 @@ void validate(const RopConfig& c) {
   if (c.stats.interval_cycles == 0) bad("stats.interval_cycles must be > 0");
 }
 
+// The trace as the partitions' SystemC threads read it. SystemC turns an
+// exception escaping a thread into an sc_report ("(E549) uncaught exception:
+// ... In file: ... In process: ..."), so the first exception of the source is
+// kept here and rethrown after sc_start(): a bad record reads the same in
+// timing mode as in functional mode (file, byte offset, record, field).
+class CapturingSource final : public FragmentSource {
+ public:
+  explicit CapturingSource(FragmentSource& inner) : inner_(inner) {}
+  const TraceHeader& header() const override { return inner_.header(); }
+  const std::string& path() const override { return inner_.path(); }
+  std::span<const Fragment> next() override {
+    try {
+      return inner_.next();
+    } catch (...) {
+      if (!error_) error_ = std::current_exception();
+      throw;
+    }
+  }
+  uint64_t position() const override { return inner_.position(); }
+  void rewind() override {
+    try {
+      inner_.rewind();
+    } catch (...) {
+      if (!error_) error_ = std::current_exception();
+      throw;
+    }
+  }
+  const std::exception_ptr& error() const { return error_; }
+
+ private:
+  FragmentSource& inner_;
+  std::exception_ptr error_;
+};
+
 json stageJson(const StageCycles& s) {
   json stalls = json::object();
   for (unsigned i = 0; i < kStallCount; ++i) stalls[stallKey(Stall(i))] = s.stalls[i];
@@ -48,12 +87,37 @@ json bySurface(const std::array<uint64_t, kSurfaceCount>& v) {
 
 }  // namespace
 
-TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const RopConfig& cfg,
+std::string vcdFilePath(const std::string& path) {
+  if (path.empty()) return path;
+  // SystemC appends ".vcd" to the name it is given; OitRop strips one first.
+  if (path.size() > 4 && path.compare(path.size() - 4, 4, ".vcd") == 0) return path;
+  return path + ".vcd";
+}
+
+void checkVcdWritable(const std::string& path) {
+  const std::string file = vcdFilePath(path);
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(file, ec);
+  errno = 0;
+  std::FILE* f = std::fopen(file.c_str(), "a");  // creates it, never truncates
+  if (!f) {
+    const int err = errno;
+    throw std::invalid_argument(fmt::format("{}: cannot write the VCD file: {}", file,
+                                            err ? std::strerror(err) : "cannot open for writing"));
+  }
+  std::fclose(f);
+  if (!existed) std::filesystem::remove(file, ec);
+}
+
+TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const RopConfig& cfg,
                        const TimingOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
   if (sc_core::sc_get_status() != sc_core::SC_ELABORATION || sc_core::sc_find_object("oit_rop"))
     throw std::logic_error("runTiming: SystemC elaborates once per process; run one timing simulation per process");
   validate(cfg);
+  // SystemC cannot report a VCD it fails to open (it crashes later): check first.
+  if (!opt.vcd_path.empty()) checkVcdWritable(opt.vcd_path);
+  CapturingSource src(trace);
 
   const TraceHeader& h = src.header();
   const model::DrawClassifier classes(h);
@@ -87,7 +151,15 @@ TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const Rop
   tlm::tlm_global_quantum::instance().set(clock.time(std::max<uint64_t>(1, cfg.sim.quantum_cycles)));
   auto top = std::make_unique<OitRop>("oit_rop", setup, opt.vcd_path);
   top->dram().memory().setSampleInterval(std::max<uint64_t>(1, cfg.stats.interval_cycles));
-  sc_core::sc_start();
+  try {
+    sc_core::sc_start();
+  } catch (const sc_core::sc_report& r) {
+    // An exception thrown in a process: rethrow the original, not SystemC's wrapper.
+    if (src.error()) std::rethrow_exception(src.error());
+    if (std::strcmp(r.get_msg_type(), sc_core::SC_ID_SIMULATION_UNCAUGHT_EXCEPTION_) == 0)
+      throw std::runtime_error(r.get_msg());
+    throw;
+  }
   if (!top->allDone()) throw std::logic_error("runTiming: the simulation stopped before every partition finished");
 
   // ---- Frame time and per-stage accounting ----
@@ -198,13 +270,24 @@ TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const Rop
   const MemoryStats& ms = top->dram().memory().stats();
   const double bytes_total = double(ms.readBytes() + ms.writeBytes());
   double peak_gbps = 0;
-  const double interval_s = double(cfg.stats.interval_cycles) / (cfg.clock.core_mhz * 1e6);
   json series = json::array();
   // Bandwidth from the bytes the DRAM buses moved per interval (by bus time):
   // the sampler's request-time counts can bunch up across partitions that run
   // a quantum apart, which would report more than the channels can move.
+  // The frame usually ends inside the last interval: its bytes are divided by
+  // the part of it the frame covers (else its rate is underestimated). A short
+  // last part may be mostly one burst, so the rate is clamped to what the
+  // channels can move; and peak is never below mean (mean is the average of the
+  // per-interval rates weighted by their lengths, with requested bytes <= bus bytes).
   const std::vector<uint64_t>& bus = ms.bus_bytes_per_interval;
-  for (uint64_t b : bus) peak_gbps = std::max(peak_gbps, double(b) / interval_s / 1e9);
+  const double channel_peak_gbps = top->dram().memory().peakBytesPerCycle() * cfg.clock.core_mhz * 1e6 / 1e9;
+  for (size_t i = 0; i < bus.size(); ++i) {
+    const Cycle begin = Cycle(i) * cfg.stats.interval_cycles;
+    const Cycle covered = cycles > begin ? std::min<Cycle>(cycles - begin, cfg.stats.interval_cycles)
+                                         : cfg.stats.interval_cycles;
+    const double seconds = double(covered) / (cfg.clock.core_mhz * 1e6);
+    peak_gbps = std::max(peak_gbps, std::min(double(bus[i]) / seconds / 1e9, channel_peak_gbps));
+  }
   for (size_t i = 0; i < top->samples().size(); ++i) {
     const TimeSample& s = top->samples()[i];
     series.push_back({{"cycle", s.cycle},
@@ -214,6 +297,7 @@ TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const Rop
   }
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
+  peak_gbps = std::max(peak_gbps, mean_gbps);
 
   uint32_t touched_tiles = 0, landed_tiles = 0;
   for (uint32_t t = 0; t < geo.tiles(); ++t) {
@@ -237,7 +321,7 @@ TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const Rop
                  {"row_misses", ms.row_misses},
                  {"peak_gbps", peak_gbps},
                  {"mean_gbps", mean_gbps},
-                 {"channel_peak_gbps", top->dram().memory().peakBytesPerCycle() * cfg.clock.core_mhz * 1e6 / 1e9},
+                 {"channel_peak_gbps", channel_peak_gbps},
                  {"node_pool_bytes_written", node_w},
                  {"node_pool_bytes_read", node_r},
                  {"footprint", {{"allocated", allocated}, {"touched", touched}}}};

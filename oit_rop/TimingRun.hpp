@@ -33,6 +33,14 @@ struct TimingResult {
   double wall_seconds = 0.0;  // not in stats: stats are deterministic
 };
 
+// The file a VCD path names: SystemC appends ".vcd" unless the path ends in it.
+std::string vcdFilePath(const std::string& path);
+// Throws std::invalid_argument naming the file when the VCD cannot be written
+// (missing folder, no permission, a directory); leaves no file behind.
+void checkVcdWritable(const std::string& path);
+
+// Errors of the trace (TraceError: file, byte offset, record, field) come out as
+// thrown by the reader, whether they happen before or during the simulation.
 TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const RopConfig& cfg,
                        const TimingOptions& opt);
 

@@ -50,6 +50,22 @@ std::string quoteName(const std::string& name) {
   return q + '"';
 }
 
+// Shows the bytes a terminal would not (control bytes and DEL) as \xNN: the
+// text of a bad field is quoted in the message, and a NUL in it would end the
+// message wherever what() is printed as a C string.
+std::string printable(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f)
+      out += fmt::format("\\x{:02x}", c);
+    else
+      out += ch;
+  }
+  return out;
+}
+
 // Reads lines and keeps track of where each starts.
 class LineReader {
  public:
@@ -110,7 +126,7 @@ class CsvReader final : public FragmentSource {
  private:
   [[noreturn]] void fail(uint64_t byte_offset, std::optional<uint64_t> record,
                          std::string field, const std::string& msg) const {
-    throw TraceError::inCsv(path_, in_.number(), byte_offset, record, std::move(field), msg);
+    throw TraceError::inCsv(path_, in_.number(), byte_offset, record, printable(field), printable(msg));
   }
   void parseMetadata(std::string_view line);
   // Parses the current line as record `record`; in pass 1 unknown draws join the table.

@@ -101,7 +101,7 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_EQ(get("lock.granularity").type, PropertyType::Enum);
   EXPECT_EQ(get("lock.granularity").allowed, "pixel | quad | tile");
   EXPECT_EQ(get("partitions.tile_width").allowed, "[1, 64], power of two");
-  EXPECT_EQ(get("alu.fp16_rate").allowed, "(0, 1]");
+  EXPECT_EQ(get("alu.fp16_rate").allowed, "[0.001, 1]");
   EXPECT_NE(get("alu.fp16_rate").description.find("[inferred]"), std::string::npos);
   EXPECT_TRUE(get("alu.fp16_rate").inferred);
   EXPECT_FALSE(get("clock.core_mhz").inferred);
@@ -196,7 +196,7 @@ TEST(ConfigTree, BadValues) {
   e = errorOf([&] { t.set("dram.channels", "0"); });
   EXPECT_EQ(e, "dram.channels: '0' is out of range; expected an integer [1, 64]");
   e = errorOf([&] { t.set("clock.core_mhz", "fast"); });
-  EXPECT_EQ(e, "clock.core_mhz: 'fast' is not a number; expected a number (0, 10000] (MHz)");
+  EXPECT_EQ(e, "clock.core_mhz: 'fast' is not a number; expected a number [1, 10000] (MHz)");
   e = errorOf([&] { t.set("clock.core_mhz", "0"); });
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
   e = errorOf([&] { t.set("dram.channels", "-2"); });
@@ -307,6 +307,41 @@ TEST(ConfigTree, JsonErrorsNameFileAndKey) {
   EXPECT_EQ(e, "/nonexistent/x.json: cannot open config file");
 }
 
+// Every parse problem of a config file names the file: nlohmann's number
+// overflow (an out_of_range, not a parse_error) included.
+TEST(ConfigTree, JsonNumberOverflowNamesTheFile) {
+  TempFile f("overflow.json", R"({"dram":{"channel_gbps":1e400}})");
+  const std::string e = errorOf([&] { resolveConfig("igpu", f.path(), {}); });
+  EXPECT_EQ(e, f.path() + ": not valid JSON: [json.exception.out_of_range.406] number overflow parsing '1e400'");
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_EQ(errorOf([&] { t.loadJson(f.path()); }), e);
+  TempFile syntax("syntax.json", "{\"lock\": {\"capacity\": 64}\n  \"x\": 1}");
+  const std::string s = errorOf([&] { resolveConfig("igpu", syntax.path(), {}); });
+  EXPECT_NE(s.find(syntax.path() + ": not valid JSON: [json.exception.parse_error.101] parse error at line 2, column 5"),
+            std::string::npos)
+      << s;
+}
+
+// JSON parsers keep the last of a repeated key silently; a config file must not.
+TEST(ConfigTree, JsonRepeatedKeyInOneObjectIsAnError) {
+  TempFile top("dup_top.json", R"({"lock":{"capacity":64},"lock":{"capacity":32}})");
+  std::string e = errorOf([&] { resolveConfig("igpu", top.path(), {}); });
+  EXPECT_EQ(e, top.path() +
+                   ": key 'lock' appears twice in the same JSON object (the second would silently replace the "
+                   "first); give each key once");
+  TempFile nested("dup_nested.json", R"({"dram":{"channels":2, "banks":4, "channels":4}})");
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  e = errorOf([&] { t.loadJson(nested.path()); });
+  EXPECT_NE(e.find(nested.path() + ": key 'dram/channels' appears twice in the same JSON object"), std::string::npos)
+      << e;
+  // The same key in different objects is fine.
+  TempFile ok("dup_ok.json",
+              R"({"early_depth":{"enabled":true}, "skip":{"early_depth":false}, "lock":{"capacity":32}})");
+  const RopConfig c = resolveConfig("igpu", ok.path(), {});
+  EXPECT_EQ(c.lock.capacity, 32u);
+  EXPECT_FALSE(c.skip.early_depth);
+}
+
 TEST(ConfigTree, PrecedencePresetFileSet) {
   TempFile f("prec.json", R"({"dram": {"channels": 3, "banks": 4}, "clock.core_mhz": 900})");
   // dgpu preset: 4 channels, 16 banks, 1216 MHz; file: 3 channels, 4 banks, 900 MHz; set: 5 channels.
@@ -380,4 +415,29 @@ TEST(ConfigTree, MarkdownTableHasBothPresets) {
   EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| `cache.hit_latency` | cycles | 10 (i) | 80 (i) |"), std::string::npos) << md;
   EXPECT_NE(md.find("pixel \\| quad \\| tile"), std::string::npos) << md;  // pipes escaped in cells
+}
+
+// Rates and bandwidths have physical lower bounds: the rate limiters keep 2^-20
+// per clock (0.001 per clock is within 0.05 %), the DRAM model 2^-16 cycles per
+// burst; a slower DRAM than 0.1 GB/s or clock below 1 MHz only made frames (and
+// time series) astronomically long.
+TEST(ConfigTree, RateAndBandwidthBounds) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  for (const auto& [path, bad] : {std::pair{"input.fragments_per_clock", "0.0001"}, std::pair{"alu.fp32_rate", "0.0005"},
+                                  std::pair{"dram.channel_gbps", "0.01"}, std::pair{"clock.core_mhz", "0.5"}}) {
+    const std::string e = errorOf([&] { t.set(path, bad); });
+    EXPECT_NE(e.find(path), std::string::npos) << e;
+    EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  }
+  EXPECT_NO_THROW(t.set("input.fragments_per_clock", "0.001"));
+  EXPECT_NO_THROW(t.set("dram.channel_gbps", "0.1"));
+  EXPECT_NO_THROW(t.validate());
+  // Too fast for the DRAM model's tick: named, with both values.
+  t.set("dram.channel_gbps", "10000");
+  t.set("clock.core_mhz", "1");
+  t.set("dram.burst_bytes", "8");
+  const std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.channel_gbps (10000 GB/s) at clock.core_mhz (1 MHz): a 8-byte burst takes 8e-07 core cycles"),
+            std::string::npos)
+      << e;
 }

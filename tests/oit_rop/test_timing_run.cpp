@@ -243,3 +243,60 @@ TEST(TimingRun, VcdTracesKeySignals) {
   EXPECT_NE(text.find("partition0_occupancy"), std::string::npos);
   std::remove(path.c_str());
 }
+
+namespace {
+
+// A source whose second batch fails, as a reader does on a bad record: the
+// first read of a trace without opaque draws happens inside a SystemC thread.
+class FailingSource final : public FragmentSource {
+ public:
+  FailingSource(std::vector<Fragment> fs) : inner_(model::testutil::header(W, H), std::move(fs), 64) {}
+  const TraceHeader& header() const override { return inner_.header(); }
+  const std::string& path() const override { return inner_.path(); }
+  std::span<const Fragment> next() override {
+    if (inner_.position() >= 64) throw std::range_error("t.oitt: byte offset 4228, record 64, field z: depth is NaN");
+    return inner_.next();
+  }
+  uint64_t position() const override { return inner_.position(); }
+  void rewind() override { inner_.rewind(); }
+
+ private:
+  model::MemorySource inner_;
+};
+
+}  // namespace
+
+// SystemC turns an exception escaping a process into an sc_report ("Error:
+// (E549) uncaught exception: ... In process: ..."): runTiming rethrows the
+// source's own exception, same type and message.
+TEST(TimingRun, SourceErrorDuringTheSimulationComesOutAsThrown) {
+  const auto r = runInChild([] {
+    FailingSource src(model::testutil::randomScene(W, H, 4, 3));
+    auto a = model::makeAlgorithm("mlab", {});
+    try {
+      return runTiming(src, *a, smallConfig(), {});
+    } catch (const std::range_error& e) {
+      throw std::invalid_argument(std::string("range_error: ") + e.what());
+    }
+  });
+  ASSERT_FALSE(r.ok);
+  EXPECT_EQ(r.error, "range_error: t.oitt: byte offset 4228, record 64, field z: depth is NaN");
+}
+
+// Peak is the busiest interval's rate, the last (cut short by the end of the
+// frame) over the part of it the frame covers; it is never below the mean.
+TEST(TimingRun, PeakBandwidthIsAtLeastMeanAndAtMostTheChannels) {
+  const auto fs = smallScene(W, H, 4, 5);
+  for (const uint64_t interval : {100u, 500u, 1700u, 100000u}) {
+    SCOPED_TRACE(interval);
+    RopConfig cfg = smallConfig();
+    cfg.stats.interval_cycles = interval;
+    const auto r = runInChild([&] { return timed("mlab", {}, fs, W, H, cfg); });
+    ASSERT_TRUE(r.ok) << r.error;
+    const auto& m = r.stats["memory"];
+    const double peak = m["peak_gbps"], mean = m["mean_gbps"];
+    EXPECT_GT(mean, 0.0);
+    EXPECT_GE(peak, mean);
+    EXPECT_LE(peak, m["channel_peak_gbps"].get<double>() * (1 + 1e-12));
+  }
+}

@@ -249,6 +249,20 @@ TEST_F(Csv, RowErrorsNameLineByteOffsetRecordAndColumn) {
   }
 }
 
+// A control byte in a field is shown escaped: what() is printed as a C string,
+// so a raw NUL would cut the message off after the field's first bytes.
+TEST_F(Csv, ControlBytesInAFieldAreEscapedAndTheMessageIsWhole) {
+  const std::string row = std::string("1,0,1,1,0.5\0,0,0,0,0.5,0", 24);
+  const std::string text = kHead + row + "\n";
+  const std::string e = csvError(text);
+  EXPECT_EQ(e.find('\0'), std::string::npos);
+  EXPECT_EQ(e, fmt::format("{}: line 6, byte offset {}, record 0, column z: '0.5\\x00' is not a decimal number", csv_,
+                           kHead.size() + 8))
+      << e;
+  const std::string tab = kHead + "1,0,1,1,0.5,0\x01,0,0,0.5,0\n";
+  EXPECT_NE(csvError(tab).find("column r: '0\\x01' is not a decimal number"), std::string::npos) << csvError(tab);
+}
+
 TEST_F(Csv, WrongColumnCounts) {
   const std::string short_row = kHead + "1,0,1,1,0,0,0,0,0\n";
   EXPECT_TRUE(contains(csvError(short_row),

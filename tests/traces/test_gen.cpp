@@ -372,5 +372,42 @@ TEST(SceneMesh, LoadsAMeshFileAndNamesTheDrawAfterIt) {
   EXPECT_THROW(SceneGenerator("mesh", o), std::runtime_error);
 }
 
+// fp32 squares of coordinates beyond about 1e19 overflow: the bounding sphere
+// came out infinite, the scale 0 and the trace empty (rc 0). The fit is
+// scale-free now, and a mesh that fp32 cannot frame at all is an error.
+TEST(SceneMesh, HugeAndTinyCoordinatesAreFramedLikeUnitOnes) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("oitsim_gen_" + std::to_string(::getpid()) + "_scaled_tri.obj");
+  auto fragmentsAt = [&](const std::string& s) {
+    std::ofstream(path) << "v 0 0 0\nv " << s << " 0 0\nv 0 " << s << " 0\nf 1 2 3\n";
+    SceneOptions o = small();
+    o.mesh = path.string();
+    VectorSink sink;
+    SceneGenerator("mesh", o).generate(sink);
+    return sink.fragments.size();
+  };
+  const size_t unit = fragmentsAt("1");
+  ASSERT_GT(unit, 500u);
+  for (const char* s : {"1e19", "1e20", "1e30", "1e-25"}) {
+    SCOPED_TRACE(s);
+    const size_t n = fragmentsAt(s);
+    EXPECT_GE(n, unit - unit / 100);
+    EXPECT_LE(n, unit + unit / 100);
+  }
+  std::ofstream(path) << "v -3e38 -3e38 -3e38\nv 3e38 3e38 3e38\nv 0 3e38 0\nf 1 2 3\n";
+  SceneOptions o = small();
+  o.mesh = path.string();
+  try {
+    VectorSink sink;
+    SceneGenerator("mesh", o).generate(sink);
+    ADD_FAILURE() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "mesh '" + path.string() +
+                                         "' cannot be framed: its bounding-sphere radius inf does not scale to a "
+                                         "finite fp32 placement; rescale its coordinates");
+  }
+  std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace oit::gen

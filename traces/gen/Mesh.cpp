@@ -388,8 +388,24 @@ MeshBounds meshBounds(const Mesh& mesh) {
   }
   if (b.min.x > b.max.x) return MeshBounds{};  // no triangles
   b.centre = (b.min + b.max) * 0.5f;
+  // Halving first gives the same bits unless the sum overflows (|coordinates| > 1.7e38).
+  if (!std::isfinite(b.centre.x) || !std::isfinite(b.centre.y) || !std::isfinite(b.centre.z))
+    b.centre = b.min * 0.5f + b.max * 0.5f;
   for (size_t i = 0; i < mesh.positions.size(); ++i)
     if (used[i]) b.radius = std::max(b.radius, length(mesh.positions[i] - b.centre));
+  // fp32 squares overflow beyond about 1e19 (radius +Inf) and underflow below
+  // about 1e-19 (radius 0): measure such meshes in double. The fp32 result is
+  // kept otherwise, so ordinary meshes give the same bits as always.
+  if (!std::isfinite(b.radius) || b.radius == 0) {
+    double r2 = 0;
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      if (!used[i]) continue;
+      const double dx = double(mesh.positions[i].x) - b.centre.x, dy = double(mesh.positions[i].y) - b.centre.y,
+                   dz = double(mesh.positions[i].z) - b.centre.z;
+      r2 = std::max(r2, dx * dx + dy * dy + dz * dz);
+    }
+    b.radius = static_cast<float>(std::sqrt(r2));  // +Inf only beyond fp32's range: addMesh refuses it
+  }
   return b;
 }
 

@@ -594,7 +594,18 @@ Vec3 addMesh(Plan& p, const MeshPlacement& place) {
   const float scale = place.radius / b.radius;
   Vec3 offset = -b.centre * scale;  // world = p * scale + offset
   if (place.on_floor) offset.y = kFloorY - b.min.y * scale;
+  auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  auto cannotFrame = [&] {
+    throw std::runtime_error(fmt::format(
+        "mesh '{}' cannot be framed: its bounding-sphere radius {} does not scale to a finite fp32 placement; "
+        "rescale its coordinates",
+        o.mesh, b.radius));
+  };
+  if (!std::isfinite(b.radius) || !(scale > 0) || !std::isfinite(scale) || !finite(offset)) cannotFrame();
   for (Vec3& v : mesh->positions) v = v * scale + offset;
+  for (const auto& tri : mesh->triangles)
+    for (uint32_t i : tri)
+      if (!finite(mesh->positions[i])) cannotFrame();
 
   const uint32_t id = p.addDraw(meshDisplayName(o.mesh), DrawClass::Transparent);
   const Mat4 vp = p.vp;

@@ -1,0 +1,198 @@
+// `oitsim run` on bad input, end to end: every problem is reported as one clean
+// line naming the option, file or offset, with exit code 1, before anything is
+// written; and the bandwidth and VCD outputs of the timing mode are sound.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "CliRunner.hpp"
+
+namespace oit::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The reader's prefix of a record error (traces/FORMAT.md, section 5).
+std::string fmt_prefix(const std::string& file, uint64_t byte_offset, const std::string& field) {
+  return file + ": byte offset " + std::to_string(byte_offset) + ", record 0, field " + field + ": ";
+}
+
+// The audit's 64x48 glass trace (no opaque draws: every record is first read
+// by the SystemC threads in timing mode).
+class CliRunErrors : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir("cli_run_errors");
+    trace_ = dir_->file("glass.oitt");
+    CliResult r = runOitsim("gen glass --width 64 --height 48 -o " + trace_);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  // The glass trace with `size` bytes at `field_offset` of record `record` replaced.
+  static std::string patched(const std::string& name, uint64_t record, size_t field_offset, const void* value,
+                             size_t size, uint64_t* byte_offset = nullptr) {
+    std::string bytes = readText(trace_);
+    uint32_t header_bytes = 0, record_bytes = 0;
+    std::memcpy(&header_bytes, bytes.data() + 12, 4);
+    std::memcpy(&record_bytes, bytes.data() + 36, 4);
+    const size_t at = header_bytes + record * record_bytes + field_offset;
+    std::memcpy(bytes.data() + at, value, size);
+    if (byte_offset) *byte_offset = at;
+    const std::string path = dir_->file(name);
+    writeText(path, bytes);
+    return path;
+  }
+  static TempDir* dir_;
+  static std::string trace_;
+};
+TempDir* CliRunErrors::dir_ = nullptr;
+std::string CliRunErrors::trace_;
+
+TEST_F(CliRunErrors, UnwritableVcdPathFailsNamingTheOptionBeforeTheSimulation) {
+  const std::string out = dir_->file("vcd_out");
+  for (const std::string vcd : {"/nonexistent_dir/y.vcd", "/proc/x/y.vcd"}) {
+    SCOPED_TRACE(vcd);
+    CliResult r = runOitsim("run -t " + trace_ + " -o " + out + " -q --vcd " + vcd);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_EQ(r.output, "oitsim: error: --vcd " + vcd + ": " + vcd +
+                            ": cannot write the VCD file: No such file or directory\n");
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // A folder given as the VCD file.
+  const std::string folder = dir_->file("folder.vcd");
+  fs::create_directories(folder);
+  CliResult r = runOitsim("run -t " + trace_ + " -o " + out + " -q --vcd " + folder);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --vcd " + folder + ": " + folder + ": cannot write the VCD file: Is a directory\n");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// SystemC wraps an exception escaping a thread ("(E549) uncaught exception ...
+// In process: ..."); the reader's own message must come out, as in functional mode.
+TEST_F(CliRunErrors, BadRecordReadsTheSameInTimingAndFunctionalMode) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const uint16_t x_out = 64;
+  const uint32_t no_draw = 999;
+  struct Case {
+    std::string name;
+    size_t field;  // offset in the fp32 record (traces/FORMAT.md 4.1)
+    const void* value;
+    size_t size;
+    std::string field_name, message;
+  };
+  const Case cases[] = {
+      {"z_nan", 4, &nan, 4, "z", "depth is NaN, expected a finite value in [0,1]"},
+      {"x_out", 0, &x_out, 2, "x", "x 64 outside the frame, expected 0 <= x < 64 (the width)"},
+      {"r_inf", 8, &inf, 4, "r", "colour r is +Inf"},
+      {"draw", 28, &no_draw, 4, "draw", "unknown draw id 999"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    uint64_t at = 0;
+    const std::string bad = patched(c.name + ".oitt", 0, c.field, c.value, c.size, &at);
+    const std::string out_f = dir_->file(c.name + "_f"), out_t = dir_->file(c.name + "_t");
+    CliResult f = runOitsim("run --mode functional -t " + bad + " -o " + out_f);
+    CliResult t = runOitsim("run -t " + bad + " -o " + out_t);
+    EXPECT_EQ(f.exit_code, 1) << f.output;
+    EXPECT_EQ(t.exit_code, f.exit_code) << t.output;
+    EXPECT_NE(f.output.find(fmt_prefix(bad, at, c.field_name) + c.message), std::string::npos) << f.output;
+    EXPECT_EQ(t.output, f.output);
+    EXPECT_EQ(t.output.find("E549"), std::string::npos) << t.output;
+    EXPECT_EQ(t.output.find("In process"), std::string::npos) << t.output;
+    EXPECT_FALSE(fs::exists(out_t));
+  }
+}
+
+// The configuration is resolved and validated whatever the mode.
+TEST_F(CliRunErrors, FunctionalModeRejectsTheSameBadTimingOptions) {
+  const std::string malformed = dir_->file("malformed.json");
+  writeText(malformed, "{\"lock\": {\"capacity\": 64,}");
+  const std::string options[] = {"--preset foo", "--set nosuch.key=1", "--config /nonexistent.json",
+                                 "--config " + malformed};
+  const std::string out = dir_->file("fn_opts");
+  for (const std::string& o : options) {
+    SCOPED_TRACE(o);
+    CliResult f = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " " + o);
+    CliResult t = runOitsim("run -q -t " + trace_ + " -o " + out + " " + o);
+    EXPECT_EQ(f.exit_code, 1) << f.output;
+    EXPECT_EQ(t.exit_code, 1) << t.output;
+    EXPECT_EQ(f.output, t.output);
+    EXPECT_EQ(f.output.rfind("oitsim: error: ", 0), 0u) << f.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  CliResult r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --vcd " + dir_->file("v.vcd"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --vcd " + dir_->file("v.vcd") +
+                          ": a VCD needs the timing model; drop --mode functional (the default is timing)\n");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir_->file("v.vcd")));
+}
+
+// The audit's case: the last time-series interval is cut short by the end of
+// the frame; peak must still be a rate at least the frame's mean.
+TEST_F(CliRunErrors, PeakBandwidthIsNeverBelowMean) {
+  for (const std::string algo : {"mlab", "abuffer", "alpha"}) {
+    SCOPED_TRACE(algo);
+    const std::string out = dir_->file("bw_" + algo);
+    CliResult r = runOitsim("run -q -t " + trace_ + " --algo " + algo + " -o " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json m = readJson(out + "/report.json")["memory"];
+    const double peak = m["peak_gbps"], mean = m["mean_gbps"], channels = m["channel_peak_gbps"];
+    EXPECT_GT(mean, 0.0);
+    EXPECT_GE(peak, mean);
+    EXPECT_LE(peak, channels);
+  }
+}
+
+TEST_F(CliRunErrors, VcdAtTheDefaultClockHasNoSystemcWarnings) {
+  const std::string out = dir_->file("vcd_ok"), vcd = dir_->file("v.vcd");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --vcd " + vcd);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");  // no (W713) "not representable in VCD time units", no (I703)
+  const std::string text = readText(vcd);
+  EXPECT_NE(text.find("$timescale\n     1 ps\n$end"), std::string::npos) << text.substr(0, 400);
+  // The last sample's time, in ps: interval_cycles x 1e6 / 1150 MHz per cycle.
+  const nlohmann::json j = readJson(out + "/report.json");
+  EXPECT_EQ(j["timing"]["clock_mhz"].get<double>(), 1150.0);
+  const auto& samples = j["timeseries"]["samples"];
+  ASSERT_FALSE(samples.empty());
+  const uint64_t cycle = samples.back()["cycle"];
+  const auto ps = uint64_t(std::llround(double(cycle) * 1e6 / 1150.0));
+  EXPECT_NE(text.find("\n#" + std::to_string(ps) + "\n"), std::string::npos) << "no time stamp #" << ps;
+}
+
+TEST_F(CliRunErrors, OutThatIsAFileIsRefusedAndLeftAlone) {
+  const std::string afile = dir_->file("afile");
+  writeText(afile, "keep me\n");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + afile);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --out " + afile + ": exists and is not a directory\n");
+  EXPECT_EQ(readText(afile), "keep me\n");
+}
+
+TEST_F(CliRunErrors, ZeroWidthOrHeightIsRefusedAtTheOption) {
+  const std::string csv = dir_->file("nosize.csv");
+  writeText(csv, "draw,prim,x,y,z,r,g,b,a,opaque\n0,0,0,0,0.5,1,0,0,0.5,0\n");
+  const std::string out = dir_->file("zero");
+  CliResult r = runOitsim("run --mode functional -q -t " + csv + " -o " + out + " --width 0 --height 4");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --width 0: expected a frame width of at least 1 pixel\n");
+  r = runOitsim("run --mode functional -q -t " + csv + " -o " + out + " --width 4 --height 0");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --height 0: expected a frame height of at least 1 pixel\n");
+  EXPECT_FALSE(fs::exists(out));
+  r = runOitsim("run --mode functional -q -t " + csv + " -o " + out + " --width 4 --height 4");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+}  // namespace
+}  // namespace oit::test
