@@ -201,6 +201,9 @@ const std::vector<Property>& registry() {
 
       integer("stats.interval_cycles", &R::stats, &StatsConfig::interval_cycles, 1,
               std::numeric_limits<uint64_t>::max(), "cycles", "time-series sample period"),
+      integer("stats.max_samples", &R::stats, &StatsConfig::max_samples, 2, 1u << 24, "",
+              "time-series length limit: on reaching it, pairs of samples merge and the period doubles "
+              "(even; an odd value counts as the next lower even one)"),
 
       boolean("skip.early_depth", &R::skip, &SkipConfig::early_depth,
               "culled fragments skip lock and cache (else they pass through both)"),

@@ -149,6 +149,14 @@ void MemorySystem::setSampleInterval(Cycle interval_cycles) {
   bucket_begin_ = kNoBucket;  // the next burst computes its bucket
 }
 
+void MemorySystem::coarsenSamples() {
+  std::vector<uint64_t>& b = stats_.bus_bytes_per_interval;
+  for (size_t i = 0; 2 * i < b.size(); ++i) b[i] = b[2 * i] + (2 * i + 1 < b.size() ? b[2 * i + 1] : 0);
+  b.resize((b.size() + 1) / 2);
+  sample_interval_ *= 2;
+  bucket_begin_ = kNoBucket;  // the next burst computes its bucket
+}
+
 void MemorySystem::sampleBursts(uint64_t xfer, uint64_t n, uint64_t step) {
   // access() handles a run that starts wholly in the current bucket itself.
   for (;;) {

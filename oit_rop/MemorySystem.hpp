@@ -43,6 +43,9 @@ class MemorySystem {
   const MemoryStats& stats() const;
   // Enables MemoryStats::bus_bytes_per_interval (0 disables it).
   void setSampleInterval(Cycle interval_cycles);
+  // Doubles the sample interval: bus_bytes_per_interval[i] becomes the sum of
+  // the old [2i] and [2i + 1], as if sampled at twice the interval all along.
+  void coarsenSamples();
   // Peak bytes per core cycle the channels can move together.
   double peakBytesPerCycle() const;
 

@@ -56,14 +56,16 @@ bool OitRop::allDone() const {
 }
 
 void OitRop::sampler() {
-  const Cycle interval = std::max<uint64_t>(1, cfg_.stats.interval_cycles);
+  interval_ = std::max<uint64_t>(1, cfg_.stats.interval_cycles);
+  // An even limit: merging pairs keeps the grid (sample n at n x interval).
+  const size_t max_samples = std::max<size_t>(2, size_t(cfg_.stats.max_samples) & ~size_t(1));
   uint64_t last_bytes = 0;
-  for (Cycle c = interval;; c += interval) {
+  for (Cycle c = interval_;; c += interval_) {
     const sc_core::sc_time t = clock_.time(c);
     if (t > sc_core::sc_time_stamp()) wait(t - sc_core::sc_time_stamp(), done_list_);
     if (allDone()) return;
     if (sc_core::sc_time_stamp() < t) {  // woken by a partition finishing: keep sampling on the grid
-      c -= interval;
+      c -= interval_;
       continue;
     }
     const MemoryStats& ms = dram_.memory().stats();
@@ -80,6 +82,19 @@ void OitRop::sampler() {
     tr_dram_bytes_ = s.dram_bytes;
     tr_waiters_ = s.lock_waiters;
     samples_.push_back(s);
+    if (samples_.size() == max_samples) {
+      // The series is as long as allowed: keep it as if sampled at twice the
+      // period from the start (bytes add up; occupancy and waiters are the
+      // values at the later sample's cycle, as a sample at 2 x interval reads).
+      for (size_t i = 0; i < max_samples / 2; ++i) {
+        TimeSample m = samples_[2 * i + 1];
+        m.dram_bytes += samples_[2 * i].dram_bytes;
+        samples_[i] = m;
+      }
+      samples_.resize(max_samples / 2);
+      interval_ *= 2;
+      dram_.memory().coarsenSamples();
+    }
   }
 }
 

@@ -32,6 +32,9 @@ class OitRop : public sc_core::sc_module {
   unsigned partitionCount() const { return unsigned(parts_.size()); }
   const RopPartition& partition(unsigned i) const { return *parts_[i]; }
   const std::vector<TimeSample>& samples() const { return samples_; }
+  // The time series' period: stats.interval_cycles, doubled each time the
+  // series reached stats.max_samples (pairs of samples merged).
+  Cycle sampleInterval() const { return interval_; }
   bool allDone() const;
 
  private:
@@ -43,6 +46,7 @@ class OitRop : public sc_core::sc_module {
   std::vector<std::unique_ptr<RopPartition>> parts_;
   sc_core::sc_event_or_list done_list_;
   std::vector<TimeSample> samples_;
+  Cycle interval_ = 1;
   sc_core::sc_trace_file* vcd_ = nullptr;
   // Values the VCD traces (updated by the sampler).
   sc_dt::uint64 tr_dram_bytes_ = 0;

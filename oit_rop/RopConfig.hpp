@@ -83,6 +83,7 @@ struct DramConfig {
 
 struct StatsConfig {
   uint64_t interval_cycles = 10000;  // time-series sample period
+  uint64_t max_samples = 16384;      // more: the period doubles (pairs of samples merge)
   bool operator==(const StatsConfig&) const = default;
 };
 

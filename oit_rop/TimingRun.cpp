@@ -280,11 +280,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   // channels can move; and peak is never below mean (mean is the average of the
   // per-interval rates weighted by their lengths, with requested bytes <= bus bytes).
   const std::vector<uint64_t>& bus = ms.bus_bytes_per_interval;
+  const Cycle interval = top->sampleInterval();  // stats.interval_cycles, doubled per stats.max_samples
   const double channel_peak_gbps = top->dram().memory().peakBytesPerCycle() * cfg.clock.core_mhz * 1e6 / 1e9;
   for (size_t i = 0; i < bus.size(); ++i) {
-    const Cycle begin = Cycle(i) * cfg.stats.interval_cycles;
-    const Cycle covered = cycles > begin ? std::min<Cycle>(cycles - begin, cfg.stats.interval_cycles)
-                                         : cfg.stats.interval_cycles;
+    const Cycle begin = Cycle(i) * interval;
+    const Cycle covered = cycles > begin ? std::min<Cycle>(cycles - begin, interval) : interval;
     const double seconds = double(covered) / (cfg.clock.core_mhz * 1e6);
     peak_gbps = std::max(peak_gbps, std::min(double(bus[i]) / seconds / 1e9, channel_peak_gbps));
   }
@@ -358,7 +358,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   }
   res.stats = {{"timing", timing}, {"fragments", fragments}, {"memory", memory}, {"lock", lockj},
                {"cache", cachej},  {"skips", skips},         {"depth", depthj},   {"alu", alu_j},
-               {"timeseries", {{"interval_cycles", cfg.stats.interval_cycles}, {"samples", series}}},
+               {"timeseries", {{"interval_cycles", interval}, {"samples", series}}},
                {"per_draw", per_draw}};
   top.reset();
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -311,6 +311,32 @@ TEST(MemorySystem, ChunkCrossingARowSplitsOverBanks) {
   EXPECT_EQ(m.stats().row_hits, 3u);
 }
 
+// Coarsening (the time series reached stats.max_samples) gives the buckets a
+// system sampling at twice the interval from the start would have, also for
+// the bursts booked after it.
+TEST(MemorySystem, CoarsenedSamplesEqualSamplingAtTwiceTheInterval) {
+  MemorySystem fine(roundConfig(2), kRoundMhz), coarse(roundConfig(2), kRoundMhz);
+  fine.setSampleInterval(7);
+  coarse.setSampleInterval(14);
+  testutil::TestLcg rnd{99, 5};
+  Cycle now = 0;
+  for (int i = 0; i < 400; ++i) {
+    if (i == 150 || i == 300) fine.coarsenSamples();  // 7 -> 14 -> 28
+    if (i == 300) coarse.coarsenSamples();            // 14 -> 28
+    const uint64_t addr = rnd(1 << 16) * 64;
+    const uint32_t bytes = uint32_t(64 * (1 + rnd(8)));
+    const bool write = rnd(2) == 0;
+    EXPECT_EQ(fine.access(now, addr, bytes, write, Surface::BlendArrays),
+              coarse.access(now, addr, bytes, write, Surface::BlendArrays));
+    now += rnd(40);
+  }
+  EXPECT_EQ(fine.stats().bus_bytes_per_interval, coarse.stats().bus_bytes_per_interval);
+  uint64_t sum = 0;
+  for (uint64_t b : fine.stats().bus_bytes_per_interval) sum += b;
+  EXPECT_GE(sum, fine.stats().readBytes() + fine.stats().writeBytes());  // whole bursts
+  EXPECT_GT(fine.stats().bus_bytes_per_interval.size(), 10u);
+}
+
 // The bus bytes of a request are bucketed burst by burst by the cycle each
 // burst starts on the bus, also when one request's bursts straddle intervals.
 TEST(MemorySystem, BusBytesOfOneRequestStraddleIntervals) {

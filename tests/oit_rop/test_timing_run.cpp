@@ -3,6 +3,7 @@
 // determinism, partition split, idle-cycle skipping, A-buffer footprint.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -299,4 +300,36 @@ TEST(TimingRun, PeakBandwidthIsAtLeastMeanAndAtMostTheChannels) {
     EXPECT_GE(peak, mean);
     EXPECT_LE(peak, m["channel_peak_gbps"].get<double>() * (1 + 1e-12));
   }
+}
+
+// A time series that reaches stats.max_samples merges pairs and doubles its
+// period: the report is then the one a run at the doubled period gives (every
+// sample, and the peak bandwidth computed from the same buckets). One
+// partition: with several, the sampler's wake-ups can change the order the
+// partitions resume in at a quantum boundary, and so their DRAM interleaving
+// (DESIGN.md), which would move the cycles slightly.
+TEST(TimingRun, TimeSeriesStaysBelowMaxSamplesAsIfSampledAtTheLongerPeriod) {
+  const auto fs = smallScene(W, H, 4, 5);
+  RopConfig capped = smallConfig();
+  capped.partitions.count = 1;
+  capped.stats.interval_cycles = 3;
+  capped.stats.max_samples = 8;
+  const auto a = runInChild([&] { return timed("mlab", {}, fs, W, H, capped); });
+  ASSERT_TRUE(a.ok) << a.error;
+  const auto& ts = a.stats["timeseries"];
+  const uint64_t interval = ts["interval_cycles"];
+  EXPECT_LT(ts["samples"].size(), 8u);
+  EXPECT_GE(ts["samples"].size(), 4u);
+  EXPECT_GT(interval, 3u);
+  EXPECT_EQ(interval % 3, 0u);
+  EXPECT_TRUE(std::has_single_bit(interval / 3)) << interval;  // 3 x 2^k
+
+  RopConfig direct = smallConfig();
+  direct.partitions.count = 1;
+  direct.stats.interval_cycles = interval;
+  const auto b = runInChild([&] { return timed("mlab", {}, fs, W, H, direct); });
+  ASSERT_TRUE(b.ok) << b.error;
+  EXPECT_EQ(a.stats["timing"]["cycles"], b.stats["timing"]["cycles"]);
+  EXPECT_EQ(ts, b.stats["timeseries"]);
+  EXPECT_EQ(a.stats["memory"]["peak_gbps"], b.stats["memory"]["peak_gbps"]);
 }
