@@ -29,7 +29,7 @@ using model::RenderResult;
 
 struct RunArgs {
   std::string trace, out, algo = "mlab", mode = "timing", format = "fp32";
-  std::string preset = "igpu", config_file, vcd;
+  std::string preset, config_file, vcd;  // preset empty: the --config file's "preset", else igpu
   std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
   bool width_given = false, height_given = false;
@@ -294,8 +294,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--algo,-a", a->algo, "OIT algorithm: " + algos)->capture_default_str();
   cmd->add_option("--mode", a->mode, "timing (SystemC ROP: cycles, stalls, DRAM) or functional (image only, faster)")
       ->capture_default_str();
-  cmd->add_option("--preset", a->preset, "ROP preset: igpu or dgpu (used in timing mode, validated in both)")
-      ->capture_default_str();
+  cmd->add_option("--preset", a->preset,
+                  "ROP preset: igpu or dgpu (default igpu, or the --config file's \"preset\"; used in timing mode, "
+                  "validated in both)");
   cmd->add_option("--config", a->config_file,
                   "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
   cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")

@@ -137,6 +137,24 @@ TEST_F(CliRunErrors, FunctionalModeRejectsTheSameBadTimingOptions) {
   EXPECT_FALSE(fs::exists(dir_->file("v.vcd")));
 }
 
+// A config file naming its preset selects it when --preset is not given (as in
+// `oitsim config`); with a different --preset the load fails naming both.
+TEST_F(CliRunErrors, ConfigFilePresetSelectsThePresetWithoutPresetOption) {
+  const std::string cfg = dir_->file("dgpu.json");
+  writeText(cfg, "{\"preset\": \"dgpu\", \"lock\": {\"capacity\": 64}}");
+  const std::string out = dir_->file("cfg_preset");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --config " + cfg);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = readJson(out + "/report.json");
+  EXPECT_EQ(j["config"]["rop"]["preset"], "dgpu");
+  EXPECT_EQ(j["config"]["rop"]["lock"]["capacity"], 64);
+  EXPECT_EQ(j["config"]["rop"]["clock"]["core_mhz"], 1216.0);
+  CliResult c = runOitsim("run -q -t " + trace_ + " -o " + dir_->file("cfg_clash") + " --config " + cfg +
+                          " --preset igpu");
+  EXPECT_EQ(c.exit_code, 1) << c.output;
+  EXPECT_NE(c.output.find("the file is for preset \"dgpu\""), std::string::npos) << c.output;
+}
+
 // The audit's case: the last time-series interval is cut short by the end of
 // the frame; peak must still be a rate at least the frame's mean.
 TEST_F(CliRunErrors, PeakBandwidthIsNeverBelowMean) {

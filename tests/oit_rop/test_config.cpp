@@ -76,7 +76,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 12u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 44u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 45u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
