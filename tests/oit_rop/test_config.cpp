@@ -441,3 +441,18 @@ TEST(ConfigTree, RateAndBandwidthBounds) {
             std::string::npos)
       << e;
 }
+
+// Partition i resumes (i + 1) ps after each quantum boundary: the largest
+// offset must stay below half a core cycle.
+TEST(ConfigTree, PartitionResumeOffsetsFitInHalfACycle) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  t.set("clock.core_mhz", "10000");  // 100 ps cycles: offsets up to 49 ps
+  t.set("partitions.count", "49");
+  EXPECT_NO_THROW(t.validate());
+  t.set("partitions.count", "50");
+  const std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("partitions.count (50) at clock.core_mhz (10000 MHz): partition resume offsets of up to 50 ps do "
+                   "not fit in half a 100.0 ps cycle"),
+            std::string::npos)
+      << e;
+}

@@ -333,3 +333,24 @@ TEST(TimingRun, TimeSeriesStaysBelowMaxSamplesAsIfSampledAtTheLongerPeriod) {
   EXPECT_EQ(ts, b.stats["timeseries"]);
   EXPECT_EQ(a.stats["memory"]["peak_gbps"], b.stats["memory"]["peak_gbps"]);
 }
+
+// Partitions resume in a fixed order at every quantum boundary, so the
+// sampler's period (its own timed wake-ups) cannot change the order their DRAM
+// requests are booked in: two partitions, same cycles and bytes at any period.
+TEST(TimingRun, SamplerPeriodDoesNotChangeTheTiming) {
+  const auto fs = smallScene(W, H, 4, 5);
+  std::vector<ChildRun> runs;
+  for (const uint64_t interval : {3u, 97u, 1000u, 10000u}) {
+    RopConfig cfg = smallConfig();
+    ASSERT_EQ(cfg.partitions.count, 2u);
+    cfg.stats.interval_cycles = interval;
+    runs.push_back(runInChild([&] { return timed("abuffer", {}, fs, W, H, cfg); }));
+    ASSERT_TRUE(runs.back().ok) << runs.back().error;
+  }
+  for (size_t i = 1; i < runs.size(); ++i) {
+    EXPECT_EQ(runs[i].stats["timing"]["cycles"], runs[0].stats["timing"]["cycles"]) << i;
+    EXPECT_EQ(runs[i].stats["timing"]["per_partition"], runs[0].stats["timing"]["per_partition"]) << i;
+    EXPECT_EQ(runs[i].stats["memory"]["dram_read_bytes"], runs[0].stats["memory"]["dram_read_bytes"]) << i;
+    EXPECT_EQ(runs[i].stats["memory"]["row_misses"], runs[0].stats["memory"]["row_misses"]) << i;
+  }
+}
