@@ -515,8 +515,8 @@ void ConfigTree::validate() const {
           "the DRAM model's resolution of 2^-16 cycles; lower the bandwidth or raise the clock",
           c.dram.channel_gbps, c.clock.core_mhz, c.dram.burst_bytes, burst_cycles));
   }
-  // Partitions resume in a fixed order at each quantum boundary, partition i
-  // (i + 1) ps after it (DESIGN.md): those offsets must stay within half a cycle.
+  // Partitions resume 1 to N ps after each quantum boundary, in round-robin
+  // order (DESIGN.md): those offsets must stay within half a cycle.
   if (c.clock.core_mhz > 0 && double(c.partitions.count) >= 0.5e6 / c.clock.core_mhz)
     errs.push_back(fmt::format(
         "partitions.count ({}) at clock.core_mhz ({} MHz): partition resume offsets of up to {} ps do not fit in half "

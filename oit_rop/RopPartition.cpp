@@ -27,7 +27,6 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       front_(*setup.front),
       clock_(cfg_.clock.core_mhz),
       quantum_(std::max<Cycle>(1, cfg_.sim.quantum_cycles)),
-      order_offset_(double(id + 1), sc_core::SC_PS),
       shader_(cfg_.input),
       early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this),
       lock_(cfg_.lock, geo_.width),
@@ -75,12 +74,16 @@ void RopPartition::advance(Cycle next, bool count_skip) {
     // Synchronise on quantum boundaries (multiples of sim.quantum_cycles), so
     // partitions interleave their DRAM requests the same way whether or not
     // idle cycles are skipped.
-    // Partition i resumes (i + 1) ps after the boundary's cycle: one fixed order
-    // per boundary (0, 1, ...) after the sampler, instead of however the
-    // kernel's event heap breaks ties between equal times (which other timed
-    // waits, such as the sampler's period, would change).
+    // At boundary k partition i resumes ((i + k) mod N + 1) ps after the
+    // boundary's cycle: a round-robin order (each partition books its quantum's
+    // DRAM requests first in turn; a fixed order would favour partition 0),
+    // after the sampler, instead of however the kernel's event heap breaks ties
+    // between equal times (which other timed waits, such as the sampler's
+    // period, would change).
     const Cycle boundary = now_ / quantum_ * quantum_;
-    const sc_core::sc_time tb = clock_.time(boundary) + order_offset_, stamp = sc_core::sc_time_stamp();
+    const uint64_t place = (id_ + boundary / quantum_) % geo_.partitions;
+    const sc_core::sc_time tb = clock_.time(boundary) + sc_core::sc_time(double(place + 1), sc_core::SC_PS),
+                           stamp = sc_core::sc_time_stamp();
     qk_.set(tb > stamp ? tb - stamp : sc_core::SC_ZERO_TIME);
     qk_.sync();
     next_sync_ = boundary + quantum_;

@@ -132,7 +132,6 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   CoreClock clock_;
   tlm_utils::tlm_quantumkeeper qk_;
   Cycle quantum_;
-  sc_core::sc_time order_offset_;  // (id + 1) ps: this partition's place in each boundary's order
   tlm::tlm_generic_payload payload_;
   DramExtension ext_;
 

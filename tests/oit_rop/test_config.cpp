@@ -442,8 +442,8 @@ TEST(ConfigTree, RateAndBandwidthBounds) {
       << e;
 }
 
-// Partition i resumes (i + 1) ps after each quantum boundary: the largest
-// offset must stay below half a core cycle.
+// Partitions resume 1 to N ps after each quantum boundary (round robin): the
+// largest offset must stay below half a core cycle.
 TEST(ConfigTree, PartitionResumeOffsetsFitInHalfACycle) {
   ConfigTree t = ConfigTree::forPreset("igpu");
   t.set("clock.core_mhz", "10000");  // 100 ps cycles: offsets up to 49 ps

@@ -334,7 +334,7 @@ TEST(TimingRun, TimeSeriesStaysBelowMaxSamplesAsIfSampledAtTheLongerPeriod) {
   EXPECT_EQ(a.stats["memory"]["peak_gbps"], b.stats["memory"]["peak_gbps"]);
 }
 
-// Partitions resume in a fixed order at every quantum boundary, so the
+// Partitions resume in round-robin order at every quantum boundary, so the
 // sampler's period (its own timed wake-ups) cannot change the order their DRAM
 // requests are booked in: two partitions, same cycles and bytes at any period.
 TEST(TimingRun, SamplerPeriodDoesNotChangeTheTiming) {
