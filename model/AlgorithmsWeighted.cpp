@@ -119,9 +119,11 @@ class Wboit final : public OitAlgorithm {
   }
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
     if (noContribution(f)) return InsertOutcome::Discarded;
+    // A += w (a c, a): the paper accumulates premultiplied colour times w(z, a),
+    // which already holds a factor a (eq. 7-10), so a enters twice.
     const float wa = weight(f);
     Rgba acc = loadAcc(fmt_, w);
-    accumulate(acc, f, wa);
+    accumulate(acc, f, wa * f.a);
     storeAcc(fmt_, acc, w);
     storeR(w, loadR(w) * (1.0f - f.a));
     return InsertOutcome::Stored;

@@ -265,10 +265,11 @@ TEST(Weighted, WeightedAverageEmptyAndZeroAlphaGiveBackground) {
 }
 
 TEST(Weighted, WboitEq10ByHand) {
-  // w = a max(.01, 3e3 (1-d)^3): .5*1536 = 768, .25*24 = 6, .75*375 = 281.25.
-  const double A = 768 + 6 + 281.25, R = 0.5 * 0.75 * 0.25;
-  expectNear(renderThree("wboit"), 768 / A * (1 - R) + 0.25 * R, 6 / A * (1 - R) + 0.5 * R,
-             281.25 / A * (1 - R) + 0.75 * R, 1e-6, "wboit eq10");
+  // w = a max(.01, 3e3 (1-d)^3): .5*1536 = 768, .25*24 = 6, .75*375 = 281.25; the
+  // accumulator adds w (a c, a): a w = 384, 1.5 and 210.9375 (a enters twice).
+  const double A = 384 + 1.5 + 210.9375, R = 0.5 * 0.75 * 0.25;
+  expectNear(renderThree("wboit"), 384 / A * (1 - R) + 0.25 * R, 1.5 / A * (1 - R) + 0.5 * R,
+             210.9375 / A * (1 - R) + 0.75 * R, 1e-6, "wboit eq10");
 }
 
 TEST(Weighted, WboitViewSpaceWeightsNeedCamera) {
@@ -286,7 +287,8 @@ TEST(Weighted, WboitViewSpaceWeightsNeedCamera) {
   for (int eq : {7, 9}) {
     p.weight = eq;
     auto w = [&](double d) { return eq == 7 ? w7(zv(d)) : w9(zv(d)); };
-    const double wr = 0.5 * w(0.2), wg = 0.25 * w(0.8), wb = 0.75 * w(0.5), A = wr + wg + wb;
+    // a w(z, a) = a^2 clamp(...): alphas .5, .25, .75.
+    const double wr = 0.25 * w(0.2), wg = 0.0625 * w(0.8), wb = 0.5625 * w(0.5), A = wr + wg + wb;
     expectNear(renderThree("wboit", p), wr / A * (1 - R) + 0.25 * R, wg / A * (1 - R) + 0.5 * R,
                wb / A * (1 - R) + 0.75 * R, 1e-5, "wboit eq" + std::to_string(eq));
   }

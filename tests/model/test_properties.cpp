@@ -438,9 +438,12 @@ TEST(PropertyTieRule, EveryAlgorithmTwoEqualDepthFragments) {
   auto lin = [&](Rgbd c, double s, double t) {  // c s + bg t
     return Rgbd{c.r * s + bg.r * t, c.g * s + bg.g * t, c.b * s + bg.b * t};
   };
-  // wboit eq. 10 at d = .5: w = a max(.01, 3e3 .5^3) = 375 a.
-  const Rgbd Sw{375 * S.r, 375 * S.g, 375 * S.b};
-  const double Aw = 375 * A;
+  // wboit eq. 10 at d = .5: w = a max(.01, 3e3 .5^3) = 375 a, accumulated as
+  // w (a c, a) = 375 a^2 (c, 1).
+  auto a2c = [](const TieFrag& f, double c) { return f.a * f.a * c; };
+  const Rgbd Sw{375 * (a2c(red, red.c.r) + a2c(blue, blue.c.r)), 375 * (a2c(red, red.c.g) + a2c(blue, blue.c.g)),
+                375 * (a2c(red, red.c.b) + a2c(blue, blue.c.b))};
+  const double Aw = 375 * (red.a * red.a + blue.a * blue.a);
   // wavg / hybrid tail: mean alpha A / 2, alpha = 1 - (1 - A/2)^2.
   const double Tavg = (1 - A / 2) * (1 - A / 2);
 
