@@ -303,6 +303,16 @@ TEST_F(Capture, ErrorsNameTheProblem) {
   }
   o = small((dir_ / "missing.obj").string());
   EXPECT_THROW(Capturer{o}, std::runtime_error);
+  // Coordinates near fp32's limit: the bounding sphere cannot be scaled into view.
+  const fs::path huge = dir_ / "huge.obj";
+  std::ofstream(huge) << "v 3e38 3e38 3e38\nv -3e38 -3e38 -3e38\nv 3e38 -3e38 0\nf 1 2 3\n";
+  o = small(huge.string());
+  try {
+    Capturer c(o);
+    FAIL() << "expected a framing error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be framed"), std::string::npos) << e.what();
+  }
 }
 
 TEST(CaptureUlp, DistanceCountsRepresentableSteps) {

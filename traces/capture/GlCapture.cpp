@@ -349,7 +349,19 @@ struct Capturer::Impl {
       const float scale = 1.0f / b.radius;
       Vec3 offset = -b.centre * scale;
       offset.x += static_cast<float>(2.2 * static_cast<double>(i) - spread);
+      // As gen's addMesh: coordinates near fp32's limit cannot be scaled into view.
+      auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+      auto cannotFrame = [&] {
+        throw std::runtime_error(fmt::format(
+            "mesh '{}' cannot be framed: its bounding-sphere radius {} does not scale to a finite fp32 placement; "
+            "rescale its coordinates",
+            opts.meshes[i], b.radius));
+      };
+      if (!std::isfinite(b.radius) || !std::isfinite(scale) || !(scale > 0) || !finite(offset)) cannotFrame();
       for (Vec3& v : mesh->positions) v = v * scale + offset;
+      for (const auto& tri : mesh->triangles)
+        for (uint32_t k : tri)
+          if (!finite(mesh->positions[k])) cannotFrame();
       meshes.push_back(std::move(mesh));
       names.push_back(gen::meshDisplayName(opts.meshes[i]));
     }
