@@ -41,6 +41,18 @@ TEST_F(CliRun, GenThenInfoPrintsStatistics) {
   EXPECT_NE(r.output.find("depth complexity"), std::string::npos) << r.output;
 }
 
+// gen's --help range is the format's: x and y are u16, so 65535 at most.
+TEST_F(CliRun, GenRefusesAFrameTheFormatCannotHoldAtTheOption) {
+  const std::string out = dir_->file("wide.oitt");
+  CliResult r = runOitsim("gen glass --width 65536 --height 1 --count 1 -o " + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--width"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("65535"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  CliResult h = runOitsim("gen --help");
+  EXPECT_NE(h.output.find("[1 - 65535]"), std::string::npos) << h.output;
+}
+
 TEST_F(CliRun, FunctionalMlabHasErrorAndAbufferHasNone) {
   const std::string out = dir_->file("f_mlab");
   CliResult r = runOitsim("run --mode functional --algo mlab --layers 4 -q --trace " + trace_ + " --out " + out);
