@@ -55,6 +55,9 @@ class BlendArrayCache {
   uint32_t tiles() const;
   uint64_t lineAddress(uint32_t tile) const;  // base_address + tile * line_bytes
   uint32_t missesInFlight(Cycle now) const;   // miss-queue entries whose line is not yet available
+  // After acquire() returned kNever: the cycle the first miss-queue entry frees
+  // (an acquire before it would be refused again). Unspecified otherwise.
+  Cycle missQueueFreesAt() const { return miss_queue_min_; }
 
  private:
   static constexpr uint32_t kInvalid = ~uint32_t(0);

@@ -59,7 +59,6 @@ void OitRop::sampler() {
   interval_ = std::max<uint64_t>(1, cfg_.stats.interval_cycles);
   // An even limit: merging pairs keeps the grid (sample n at n x interval).
   const size_t max_samples = std::max<size_t>(2, size_t(cfg_.stats.max_samples) & ~size_t(1));
-  uint64_t last_bytes = 0;
   for (Cycle c = interval_;; c += interval_) {
     const sc_core::sc_time t = clock_.time(c);
     if (t > sc_core::sc_time_stamp()) wait(t - sc_core::sc_time_stamp(), done_list_);
@@ -68,12 +67,14 @@ void OitRop::sampler() {
       c -= interval_;
       continue;
     }
-    const MemoryStats& ms = dram_.memory().stats();
-    const uint64_t bytes = ms.readBytes() + ms.writeBytes();
+    // The bytes the buses moved in [c - interval, c) (by bus time, as the
+    // report's series): final now, since every request booked from here on has
+    // a later `now` than c and no burst starts before its request.
+    const std::vector<uint64_t>& bus = dram_.memory().stats().bus_bytes_per_interval;
+    const size_t bucket = size_t(c / interval_) - 1;
     TimeSample s;
     s.cycle = c;
-    s.dram_bytes = bytes - last_bytes;
-    last_bytes = bytes;
+    s.dram_bytes = bucket < bus.size() ? bus[bucket] : 0;
     for (unsigned i = 0; i < parts_.size(); ++i) {
       tr_occupancy_[i] = parts_[i]->lock().occupancy();
       s.occupancy += tr_occupancy_[i];

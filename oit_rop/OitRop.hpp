@@ -17,7 +17,7 @@ namespace oit::rop {
 
 struct TimeSample {
   Cycle cycle = 0;
-  uint64_t dram_bytes = 0;   // read + written in the interval ending at `cycle`
+  uint64_t dram_bytes = 0;   // bytes the DRAM buses moved in the interval ending at `cycle`
   uint32_t occupancy = 0;    // scoreboard entries in use, all partitions
   uint32_t lock_waiters = 0; // fragments waiting for their pixel lock
 };

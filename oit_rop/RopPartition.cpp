@@ -162,28 +162,16 @@ void RopPartition::refillInput() {
   starving_ = q.empty() && !front_.exhausted();
 }
 
-Cycle RopPartition::missRetry() {
-  // The miss queue frees when an outstanding fill completes.
-  const Cycle c = pruneMisses();
-  return c == kNever ? now_ + 1 : c;
-}
-
-Cycle RopPartition::pruneMisses() {
-  // Fills completed by now_ can never be the next event again (now_ only grows).
-  // misses_ is a min-heap: the completed ones are on top.
-  while (!misses_.empty() && misses_.front() <= now_) {
-    std::pop_heap(misses_.begin(), misses_.end(), std::greater<>());
-    misses_.pop_back();
-  }
-  return misses_.empty() ? kNever : misses_.front();
-}
-
-void RopPartition::recordMiss(Cycle ready) {
-  // Pruned here too (without refusals missRetry() never runs), so the heap
-  // holds about the fills in flight, not every miss of the frame.
-  pruneMisses();
-  misses_.push_back(ready);
-  std::push_heap(misses_.begin(), misses_.end(), std::greater<>());
+bool RopPartition::acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready) {
+  // While every miss-queue entry is busy a retry would be refused again: no call
+  // until the first entry frees, so the refusals counted (cache.miss_queue_full:
+  // one per access that had to wait) and the cycle the access goes through do
+  // not depend on how often the partition is evaluated (skip.idle_cycles).
+  if (now < retry_at_) return false;
+  ready = cache_.acquire(now, tile, write);
+  if (ready != kNever) return true;
+  retry_at_ = cache_.missQueueFreesAt();
+  return false;
 }
 
 bool RopPartition::transparentStep() {
@@ -235,17 +223,13 @@ bool RopPartition::transparentStep() {
     const uint32_t t = lock_.frontReady();
     const TokenInfo& k = tok_[t];
     const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
-    const uint64_t fills = cache_.stats().misses;
-    const Cycle r = cache_.acquire(now, k.tile, write);
-    if (r == kNever) {
+    Cycle r = 0;
+    if (!acquireGated(now, k.tile, write, r)) {
       refused = true;
       break;
     }
     lock_.enterFront(now);
     const bool miss = r > now + cfg_.cache.hit_latency;
-    // A hit under miss waits for a fill that misses_ already holds (recorded by
-    // the miss that started it), so only new fills are recorded.
-    if (miss & (cache_.stats().misses != fills)) recordMiss(r);
     cache_q_.push({t, r, miss});
     ++accepted;
   }
@@ -378,7 +362,7 @@ Cycle RopPartition::nextEvent(bool refused, bool sb_full, bool draining) {
   if (!tail_q_.empty()) next = std::min(next, tail_q_.front().first);
   if (!cache_q_.empty())
     next = std::min(next, cache_q_.front().ready > now ? cache_q_.front().ready : alu_.nextSlot(now));
-  if (lock_.hasReady()) next = std::min(next, refused ? missRetry() : now + 1);
+  if (lock_.hasReady()) next = std::min(next, refused ? retry_at_ : now + 1);
   if (!front_.queue(id_).empty() && !sb_full && !draining) next = std::min(next, shader_.nextSlot(now));
   if (draining && lock_.occupancy() == 0) next = now + 1;
   return next;
@@ -428,14 +412,12 @@ void RopPartition::resolvePhase() {
     unsigned acquired = 0;
     bool refused = false;
     while (next_issue < tiles.size() && pf.size() < kResolvePrefetch && acquired < cache_ports_) {
-      const uint64_t fills = cache_.stats().misses;
-      const Cycle r = cache_.acquire(now, tiles[next_issue], false);
-      if (r == kNever) {
+      Cycle r = 0;
+      if (!acquireGated(now, tiles[next_issue], false, r)) {
         refused = true;
         break;
       }
       const bool miss = r > now + cfg_.cache.hit_latency;
-      if (miss & (cache_.stats().misses != fills)) recordMiss(r);  // (hits under miss: see transparentStep)
       pf.push({tiles[next_issue], r, miss});
       ++next_issue;
       ++acquired;
@@ -478,7 +460,7 @@ void RopPartition::resolvePhase() {
       if (computing) next = std::min(next, compute_done);
       if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
       if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
-      if (refused) next = std::min(next, missRetry());
+      if (refused) next = std::min(next, retry_at_);
       if (!computing && !pf.empty() && pf.front().ready <= now && !window_blocked) next = now + 1;
       next = std::max(next == kNever ? now + 1 : next, now + 1);
     }

@@ -120,9 +120,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   void release(uint32_t token);
   void nodeWrite();
   void refillInput();
-  Cycle missRetry();
-  Cycle pruneMisses();           // drops completed fills; the earliest outstanding (kNever: none)
-  void recordMiss(Cycle ready);  // an outstanding fill completing at `ready`
+  // BlendArrayCache::acquire, not called before retry_at_ (false: refused; ready: when the line is there).
+  bool acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready);
 
   unsigned id_;
   PartitionSetup s_;
@@ -143,7 +142,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
-  std::vector<Cycle> misses_;                // outstanding fill completions, a min-heap
+  Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees
   unsigned cache_ports_;
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
