@@ -288,12 +288,23 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     const double seconds = double(covered) / (cfg.clock.core_mhz * 1e6);
     peak_gbps = std::max(peak_gbps, std::min(double(bus[i]) / seconds / 1e9, channel_peak_gbps));
   }
-  for (size_t i = 0; i < top->samples().size(); ++i) {
+  const size_t sampled = top->samples().size();
+  for (size_t i = 0; i < sampled; ++i) {
     const TimeSample& s = top->samples()[i];
     series.push_back({{"cycle", s.cycle},
                       {"dram_bytes", i < bus.size() ? bus[i] : 0},
                       {"scoreboard_occupancy", s.occupancy},
                       {"lock_waiters", s.lock_waiters}});
+  }
+  // The sampler stops when the last partition is done, at or before the frame's
+  // end: one more sample at the end cycle holds the rest of the bus bytes (so the
+  // series adds up to every byte moved, and a frame shorter than one interval
+  // still has one sample). Nothing is in flight then.
+  const Cycle last_sampled = sampled ? top->samples().back().cycle : 0;
+  if (cycles > last_sampled) {
+    uint64_t rest = 0;
+    for (size_t i = sampled; i < bus.size(); ++i) rest += bus[i];
+    series.push_back({{"cycle", cycles}, {"dram_bytes", rest}, {"scoreboard_occupancy", 0}, {"lock_waiters", 0}});
   }
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
