@@ -134,6 +134,16 @@ void checkOptions(const RunArgs& a) {
 }
 
 void runReplay(RunArgs& a) {
+  // A stale report in the output folder must never pass for this run's, also
+  // when this run fails on an option or the trace: remove it before any check.
+  const fs::path out(a.out);
+  std::error_code ec;
+  if (fs::is_directory(out, ec)) {
+    fs::remove(out / "report.json", ec);
+    if (ec && ec != std::errc::no_such_file_or_directory)
+      throw std::invalid_argument(
+          fmt::format("--out {}: cannot remove the old report.json: {}", a.out, ec.message()));
+  }
   checkOptions(a);
   a.params.format = model::parseStorageFormat(a.format);
   const bool timing = a.mode == "timing";
@@ -157,13 +167,6 @@ void runReplay(RunArgs& a) {
   auto algo = model::makeAlgorithm(a.algo, a.params);
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
 
-  // A stale report in the output folder must never pass for this run's.
-  const fs::path out(a.out);
-  std::error_code ec;
-  fs::remove(out / "report.json", ec);
-  if (ec && ec != std::errc::no_such_file_or_directory)
-    throw std::invalid_argument(
-        fmt::format("--out {}: cannot remove the old report.json: {}", a.out, ec.message()));
 
   TimedRender run;
   nlohmann::json timing_stats;

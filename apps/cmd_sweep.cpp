@@ -648,8 +648,10 @@ void runSweep(const SweepArgs& a) {
     tasks.push_back([&, i](size_t) {
       const Point& p = points[i];
       const fs::path dir = out / "points" / p.id;
+      // A fresh folder: nothing of an earlier sweep into the same --out (its
+      // report.json, images, status) can pass for this run's.
+      fs::remove_all(dir);
       fs::create_directories(dir);
-      fs::remove(dir / "status.json");
       const Outcome o = spawnAndWait(exe, p.args, dir / "stdout.txt", dir / "stderr.txt");
       const bool ok = o.exit_code == 0 && fs::exists(dir / "report.json");
       nlohmann::json st{{"exit_code", o.exit_code}, {"wall_seconds", o.wall_seconds}};
@@ -706,7 +708,11 @@ int collectSweep(const std::string& dir_str, bool quiet) {
     std::string error;
     bool ran = true;
     nlohmann::json flat = nlohmann::json::object();
-    if (fs::exists(pd / "report.json")) {
+    const int exit_code = status.is_object() ? status.value("exit_code", 0) : 0;
+    if (exit_code != 0) {  // failed, whatever else the folder holds
+      error = tailOf(pd / "stderr.txt");
+      if (error.empty()) error = fmt::format("exit code {}", exit_code);
+    } else if (fs::exists(pd / "report.json")) {
       try {
         std::ifstream r(pd / "report.json");
         flatten(nlohmann::json::parse(r), "", flat);

@@ -137,6 +137,30 @@ TEST_F(CliRunErrors, FunctionalModeRejectsTheSameBadTimingOptions) {
   EXPECT_FALSE(fs::exists(dir_->file("v.vcd")));
 }
 
+// An earlier run's report.json never survives a run that fails, however early
+// it fails (an option, the configuration, the trace).
+TEST_F(CliRunErrors, FailedRunLeavesNoEarlierReport) {
+  const std::string out = dir_->file("stale");
+  CliResult ok = runOitsim("run -q --mode functional -t " + trace_ + " -o " + out);
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  const std::string cut = dir_->file("cut.oitt");
+  {
+    const std::string bytes = readText(trace_);
+    writeText(cut, bytes.substr(0, bytes.size() - 7));  // a truncated last record
+  }
+  const std::vector<std::string> bad = {"-t " + trace_ + " -k 100", "-t " + trace_ + " --set lock.capacity=0",
+                                        "-t " + cut};
+  for (const std::string& b : bad) {
+    SCOPED_TRACE(b);
+    CliResult w = runOitsim("run -q --mode functional -t " + trace_ + " -o " + out);
+    ASSERT_EQ(w.exit_code, 0) << w.output;
+    ASSERT_TRUE(fs::exists(out + "/report.json"));
+    CliResult r = runOitsim("run -q -o " + out + " " + b);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(out + "/report.json"));
+  }
+}
+
 // A config file naming its preset selects it when --preset is not given (as in
 // `oitsim config`); with a different --preset the load fails naming both.
 TEST_F(CliRunErrors, ConfigFilePresetSelectsThePresetWithoutPresetOption) {

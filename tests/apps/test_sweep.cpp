@@ -204,6 +204,29 @@ TEST(SweepErrors, FailedPointIsReportedAndTheSweepGoesOn) {
   EXPECT_TRUE(fs::exists(d.file("o") + "/points/0001-glass-hybrid/report.json"));
 }
 
+// A sweep run again into the same folder: a point that now fails is failed, not
+// reported ok with the earlier run's report.json (each point runs in a fresh
+// folder, a non-zero exit code is a failure whatever the folder holds).
+TEST(SweepErrors, RerunIntoTheSameFolderNeverShowsTheOldReport) {
+  TempDir d("sweep_rerun");
+  writeText(d.file("broken.oitt"), "not a trace\n");
+  CliResult g = runOitsim("gen glass --width 64 --height 48 -o " + d.file("good.oitt"));
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  writeText(d.file("a.json"), R"({"traces": [{"path": "good.oitt", "name": "t"}], "base": {"mode": "functional"},
+    "axes": {"algo": ["mlab"]}})");
+  writeText(d.file("b.json"), R"({"traces": [{"path": "broken.oitt", "name": "t"}], "base": {"mode": "functional"},
+    "axes": {"algo": ["mlab"]}})");
+  CliResult a = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " -q");
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  ASSERT_TRUE(fs::exists(d.file("o") + "/points/0000-t-mlab/report.json"));
+  CliResult b = runOitsim("sweep " + d.file("b.json") + " --out " + d.file("o") + " -q");
+  EXPECT_EQ(b.exit_code, 2) << b.output;
+  EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-t-mlab/report.json"));
+  const nlohmann::json res = readJson(d.file("o") + "/results.json");
+  EXPECT_EQ(res["points"][0]["status"], "failed");
+  EXPECT_EQ(res["summary"]["failed"], 1);
+}
+
 TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
   TempDir d("sweep_spec");
   writeText(d.file("bad_axis.json"), R"({"traces": [{"gen": "glass"}], "axes": {"colour": ["red"]}})");
