@@ -107,7 +107,9 @@ void runInfo(const InfoArgs& a) {
     j["draws"] = nlohmann::json::array();
     for (const DrawStats& d : st.draws)
       j["draws"].push_back({{"id", d.draw.id}, {"name", d.draw.name}, {"class", toString(d.draw.cls)},
-                            {"fragments", d.fragments}});
+                            {"fragments", d.fragments},
+                            // as the table's prims>=: the largest primitive id + 1, a lower bound
+                            {"primitives_at_least", d.fragments ? d.max_prim + 1ull : 0ull}});
     j["depth_complexity"] = {{"all", complexityJson(st.all)},
                              {"transparent", complexityJson(st.transparent)},
                              {"opaque", complexityJson(st.opaque)}};

@@ -35,6 +35,8 @@ TEST(CliInfo, CsvStatisticsAsJson) {
   EXPECT_EQ(j["draws"][0]["fragments"], 1);
   EXPECT_EQ(j["draws"][1]["class"], "transparent");
   EXPECT_EQ(j["draws"][1]["fragments"], 5);
+  EXPECT_EQ(j["draws"][0]["primitives_at_least"], 1);  // prim ids 0 and 0..3, as the table's prims>=
+  EXPECT_EQ(j["draws"][1]["primitives_at_least"], 4);
   const auto& t = j["depth_complexity"]["transparent"];
   EXPECT_EQ(t["covered_pixels"], 3);
   EXPECT_EQ(t["max"], 3);
