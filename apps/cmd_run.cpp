@@ -307,7 +307,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode only; the folder must exist)");
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
-  cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b")->capture_default_str();
+  cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b; mlcb: coverage-mask bits")->capture_default_str();
   cmd->add_option("--samples", a->params.samples, "stochastic: samples per pixel S")->capture_default_str();
   cmd->add_option("--weight", a->params.weight, "wboit: weight equation 7, 8, 9 or 10")->capture_default_str();
   cmd->add_option("--seed", a->params.seed, "Seed of the per-fragment random hash")->capture_default_str();

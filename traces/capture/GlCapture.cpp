@@ -212,6 +212,7 @@ struct DrawGeom {
   uint32_t id = 0;
   DrawClass cls = DrawClass::Transparent;
   std::vector<Part> parts;
+  bool cull_back = false;  // as gen's CullMode::Back (the backdrop's wall and pillar)
 };
 struct Vertex {
   float clip[4];
@@ -326,8 +327,11 @@ struct Capturer::Impl {
     glBindVertexArray(vao);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo);
     glBindBufferBase(GL_ATOMIC_COUNTER_BUFFER, 0, counter);
-    // Nothing may drop a fragment: no culling, no scissor, no multisampling.
+    // Nothing may drop a fragment: no scissor, no multisampling; culling only
+    // where gen culls (DrawGeom::cull_back, set per draw).
     glDisable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);  // gen's front faces: counter-clockwise in window coordinates
     glDisable(GL_SCISSOR_TEST);
     glDisable(GL_MULTISAMPLE);
     glDisable(GL_STENCIL_TEST);
@@ -422,6 +426,7 @@ struct Capturer::Impl {
       part.tris = s.triCount() - part.first_tri;
       wall.parts.push_back(part);
     }
+    wall.cull_back = true;  // gen draws the backdrop with CullMode::Back
     s.draws.push_back(std::move(wall));
 
     DrawGeom pillar{1, DrawClass::Opaque, {}};
@@ -437,6 +442,7 @@ struct Capturer::Impl {
     }
     part.tris = s.triCount() - part.first_tri;
     pillar.parts.push_back(part);
+    pillar.cull_back = true;  // its back faces would add hidden fragments gen does not make
     s.draws.push_back(std::move(pillar));
   }
 
@@ -566,6 +572,7 @@ CaptureStats Capturer::capture(FragmentSink& sink, double azimuth_offset_deg) {
   const GLuint zero = 0;
   for (const DrawGeom& d : s.draws) {
     frags.clear();
+    d.cull_back ? glEnable(GL_CULL_FACE) : glDisable(GL_CULL_FACE);
     uint64_t prim_base = 0;
     for (const Part& p : d.parts) {
       m.setPart(s, d.id, p);
@@ -639,6 +646,7 @@ GlReference Capturer::reference(double azimuth_offset_deg) {
         opaque ? glDisable(GL_BLEND) : glEnable(GL_BLEND);
         glDepthMask(opaque ? GL_TRUE : GL_FALSE);
       }
+      d.cull_back ? glEnable(GL_CULL_FACE) : glDisable(GL_CULL_FACE);
       uint64_t prim_base = 0;
       for (const Part& p : d.parts) {
         m.setPart(s, d.id, p);
