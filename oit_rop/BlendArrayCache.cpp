@@ -56,10 +56,6 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   const uint32_t entries = cfg_.miss_queue;
   uint32_t slot = 0;
   uint32_t in_flight = 0;
-  if (miss_queue_min_ > now) {
-    ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
-    return kNever;
-  }
   if (miss_queue_max_ > now) {
     slot = entries;
     Cycle smallest = kNever;
@@ -110,7 +106,7 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   line_of_[tile] = static_cast<uint32_t>(victim_index);
   if (write) touched_[tile] = 1;
 
-  miss_queue_[slot] = ready;  // (miss_queue_min_ <= now <= ready: still a lower bound)
+  miss_queue_[slot] = ready;
   miss_queue_max_ = std::max(miss_queue_max_, ready);
   stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, in_flight + (ready > now ? 1u : 0u));
   return ready;

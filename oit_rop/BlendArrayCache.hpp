@@ -85,9 +85,7 @@ class BlendArrayCache {
   // The largest miss_queue_ entry, exact: an entry is only ever overwritten by a
   // later cycle (it is free, <= now, and the new one is >= now).
   Cycle miss_queue_max_ = 0;
-  // A lower bound of the smallest miss_queue_ entry (exact after a refused
-  // acquire): while it is > now every entry is busy, so a refusal needs no scan
-  // (a stalled partition retries the same refused miss cycle after cycle).
+  // The smallest miss_queue_ entry as of the last refused acquire (missQueueFreesAt).
   Cycle miss_queue_min_ = 0;
   uint64_t stamp_ = 0;
   CacheStats stats_;

@@ -59,6 +59,22 @@ class Capture : public ::testing::Test {
     o.meshes = {mesh};
     return o;
   }
+  // The fragments Mesa records for o, and gen's for the same mesh scene
+  // (size, mesh, azimuth, backdrop).
+  static std::pair<std::vector<Fragment>, std::vector<Fragment>> mesaAndGen(const CaptureOptions& o) {
+    Capturer cap(o);
+    VectorSink mesa;
+    cap.capture(mesa);
+    gen::SceneOptions g;
+    g.width = o.width;
+    g.height = o.height;
+    g.mesh = o.meshes.at(0);
+    g.azimuth_deg = o.azimuth_deg;
+    g.backdrop = o.backdrop;
+    VectorSink ours;
+    gen::generateScene("mesh", g, ours);
+    return {std::move(mesa.fragments), std::move(ours.fragments)};
+  }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
   static std::string slurp(const std::string& p) {
     std::ifstream in(p, std::ios::binary);
@@ -190,20 +206,11 @@ TEST_F(Capture, GenAndMesaProduceTheSameFragments) {
     o.width = 320;
     o.height = 240;
     o.azimuth_deg = az;
-    Capturer cap(o);
-    VectorSink mesa;
-    cap.capture(mesa);
-    gen::SceneOptions g;
-    g.width = o.width;
-    g.height = o.height;
-    g.mesh = "bunny";
-    g.azimuth_deg = az;
-    VectorSink ours;
-    gen::generateScene("mesh", g, ours);
+    const auto [mesa, ours] = mesaAndGen(o);
     using Key = std::tuple<uint32_t, uint16_t, uint16_t>;
     std::set<Key> a, b;
-    for (const Fragment& f : mesa.fragments) a.insert({f.prim, f.y, f.x});
-    for (const Fragment& f : ours.fragments) b.insert({f.prim, f.y, f.x});
+    for (const Fragment& f : mesa) a.insert({f.prim, f.y, f.x});
+    for (const Fragment& f : ours) b.insert({f.prim, f.y, f.x});
     std::vector<Key> only_mesa, only_gen;
     std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(only_mesa));
     std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only_gen));
@@ -244,19 +251,10 @@ TEST_F(Capture, BackdropDrawsMatchGenPerDraw) {
   requireMesh("bunny");
   CaptureOptions o = small();
   o.backdrop = true;
-  Capturer cap(o);
-  VectorSink mesa;
-  cap.capture(mesa);
-  gen::SceneOptions g;
-  g.width = o.width;
-  g.height = o.height;
-  g.mesh = "bunny";
-  g.backdrop = true;
-  VectorSink ours;
-  gen::generateScene("mesh", g, ours);
+  const auto [mesa, ours] = mesaAndGen(o);
   std::map<uint32_t, std::set<std::tuple<uint32_t, uint16_t, uint16_t>>> a, b;  // draw -> (prim, y, x)
-  for (const Fragment& f : mesa.fragments) a[f.draw].insert({f.prim, f.y, f.x});
-  for (const Fragment& f : ours.fragments) b[f.draw].insert({f.prim, f.y, f.x});
+  for (const Fragment& f : mesa) a[f.draw].insert({f.prim, f.y, f.x});
+  for (const Fragment& f : ours) b[f.draw].insert({f.prim, f.y, f.x});
   for (uint32_t d : {0u, 1u}) {  // backdrop, pillar
     SCOPED_TRACE(d);
     EXPECT_GT(b[d].size(), 0u);
