@@ -196,6 +196,9 @@ const std::vector<Property>& registry() {
       integer("dram.interleave_bytes", &R::dram, &DramConfig::interleave_bytes, 8, 1u << 20, "bytes",
               "consecutive bytes on one channel before the next", true),
       boolean("dram.open_row", &R::dram, &DramConfig::open_row, "keep rows open: row hits pay CL only"),
+      boolean("dram.bank_hash", &R::dram, &DramConfig::bank_hash,
+              "bank = bank bits XOR every bank-sized group of row bits (permutation interleaving), so "
+              "streams in far-apart regions fall in different banks; false = the plain row-bank-column map"),
       real("dram.controller_ns", &R::dram, &DramConfig::controller_ns, 0, false, 100000, "ns",
            "fixed controller + interconnect latency added to every access [inferred]"),
 
@@ -631,9 +634,13 @@ std::string presetTableMarkdown() {
     const PropertyInfo& i = cols[0][r];
     out += fmt::format("| `{}` | {} |", i.path, i.unit);
     for (const auto& c : cols) out += fmt::format(" {}{} |", c[r].value, c[r].inferred ? " (i)" : "");
-    std::string allowed;  // "pixel | quad" would split the Markdown cell
-    for (char ch : i.allowed) allowed += ch == '|' ? std::string("\\|") : std::string(1, ch);
-    out += fmt::format(" {} | {} |\n", allowed, i.description);
+    // A bare '|' ("pixel | quad") would split the Markdown cell.
+    auto cell = [](const std::string& text) {
+      std::string c;
+      for (char ch : text) c += ch == '|' ? std::string("\\|") : std::string(1, ch);
+      return c;
+    };
+    out += fmt::format(" {} | {} |\n", cell(i.allowed), cell(i.description));
   }
   return out;
 }

@@ -82,6 +82,7 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   map_.interleave_bytes = cfg.interleave_bytes;
   map_.row_bytes = cfg.row_bytes;
   map_.multi_channel = cfg.channels > 1;
+  map_.bank_hash = cfg.bank_hash;
   map_.pow2 = map_.interleave.shift >= 0 && map_.channel.shift >= 0 && map_.row.shift >= 0 && map_.bank.shift >= 0;
 
   bus_free_.assign(cfg.channels, 0);
@@ -128,6 +129,21 @@ inline MemorySystem::Run MemorySystem::AddressMap::locateRun(uint64_t addr) cons
     ch = channel.mod(chunk);
     bk = bank.mod(row_line);
     rw = bank.div(row_line);
+  }
+  // Permutation interleaving (dram.bank_hash): the row's bank-sized digit
+  // groups are XORed into the bank (banks a power of two; else their sum is
+  // added, mod banks). For a fixed row the map stays a bijection of the banks,
+  // so a sequential stream still walks all of them, but streams whose
+  // addresses differ only in high bits (one region per partition and
+  // surface) stop meeting in one bank on different rows.
+  if (bank_hash && bank.d > 1) {
+    if (bank.shift > 0) {
+      for (uint64_t r = rw; r != 0; r >>= bank.shift) bk ^= r & bank.mask;
+    } else {
+      uint64_t sum = bk;
+      for (uint64_t r = rw; r != 0; r = bank.div(r)) sum += bank.mod(r);
+      bk = bank.mod(sum);
+    }
   }
   // The location changes where the local address enters the next row, or where
   // the next chunk goes to another channel; with one channel the local address

@@ -110,6 +110,7 @@ class MemorySystem {
     uint64_t interleave_bytes = 0, row_bytes = 0;
     bool multi_channel = false;  // chunk ends split runs
     bool pow2 = false;           // interleave, channels, row and banks all powers of two
+    bool bank_hash = false;      // DramConfig::bank_hash
     Run locateRun(uint64_t addr) const;
   };
   // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to

@@ -77,6 +77,7 @@ struct DramConfig {
   unsigned burst_bytes = 64;        // access granularity
   unsigned interleave_bytes = 256;  // channel interleave
   bool open_row = true;             // keep rows open (hits pay CL only)
+  bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
   bool operator==(const DramConfig&) const = default;
 };
@@ -96,7 +97,7 @@ struct SkipConfig {
 };
 
 struct SimConfig {
-  uint64_t quantum_cycles = 1000;  // tlm_quantumkeeper quantum
+  uint64_t quantum_cycles = 200;  // tlm_quantumkeeper quantum (within ~1 % of lockstep: DESIGN.md)
   bool operator==(const SimConfig&) const = default;
 };
 

@@ -75,8 +75,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 12u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 45u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 13u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 46u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -415,6 +415,19 @@ TEST(ConfigTree, MarkdownTableHasBothPresets) {
   EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| `cache.hit_latency` | cycles | 10 (i) | 80 (i) |"), std::string::npos) << md;
   EXPECT_NE(md.find("pixel \\| quad \\| tile"), std::string::npos) << md;  // pipes escaped in cells
+  // Every row has the header's 6 cells: no unescaped '|' inside a value or description.
+  size_t rows = 0;
+  for (size_t b = 0, e; b < md.size(); b = e + 1) {
+    e = md.find('\n', b);
+    if (e == std::string::npos) e = md.size();
+    const std::string line = md.substr(b, e - b);
+    if (line.empty()) continue;
+    size_t pipes = 0;
+    for (size_t k = 0; k < line.size(); ++k) pipes += line[k] == '|' && (k == 0 || line[k - 1] != '\\');
+    EXPECT_EQ(pipes, 7u) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 2u + ConfigTree::forPreset("igpu").properties().size());
 }
 
 // Rates and bandwidths have physical lower bounds: the rate limiters keep 2^-20

@@ -29,6 +29,7 @@ DramConfig roundConfig(unsigned channels) {
   c.interleave_bytes = 256;
   c.open_row = true;
   c.controller_ns = 40.0;
+  c.bank_hash = false;  // the hand-derived expectations use the plain [row | bank | column] map
   return c;
 }
 constexpr double kRoundMhz = 1000.0;
@@ -195,6 +196,58 @@ TEST(MemorySystem, AddressMapping) {
   EXPECT_EQ(m.bankOf(256 * 1024), 0u);
   EXPECT_EQ(m.rowOf(256 * 1024), 1u);
   EXPECT_EQ(m.channelOf(256 * 1024), 0u);
+}
+
+// dram.bank_hash: for a fixed row the bank map stays a bijection (a stream
+// still walks every bank), and the row's bits move the bank.
+TEST(MemorySystem, BankHashPermutesTheBanksOfEveryRow) {
+  for (unsigned banks : {8u, 6u}) {
+    DramConfig c = roundConfig(1);
+    c.banks = banks;
+    c.bank_hash = true;
+    MemorySystem m(c, kRoundMhz);
+    const uint64_t row_group = uint64_t(banks) * c.row_bytes;  // one row index across the banks
+    for (uint64_t row : {uint64_t(0), uint64_t(1), uint64_t(5), uint64_t(1) << 20, (uint64_t(1) << 27) + 3}) {
+      std::vector<int> seen(banks, 0);
+      for (unsigned b = 0; b < banks; ++b) {
+        const uint64_t addr = row * row_group + uint64_t(b) * c.row_bytes;
+        ASSERT_EQ(m.rowOf(addr), row);
+        ++seen[m.bankOf(addr)];
+      }
+      for (unsigned b = 0; b < banks; ++b) EXPECT_EQ(seen[b], 1) << banks << " banks, row " << row << ", bank " << b;
+    }
+  }
+  // By hand: 8 banks, row 1 -> bank index XOR 1; row 2^20 -> XOR (1 << (20 % 3)) = 4.
+  DramConfig c = roundConfig(1);
+  c.bank_hash = true;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.bankOf(65536), 1u);
+  EXPECT_EQ(m.bankOf(65536 + 3 * 8192), 2u);
+  EXPECT_EQ(m.bankOf(uint64_t(65536) << 20), 4u);
+  // 6 banks (digit sum): row 7 = digits 1, 1 -> bank index + 2 (mod 6).
+  c.banks = 6;
+  MemorySystem six(c, kRoundMhz);
+  EXPECT_EQ(six.bankOf(7 * 6 * 8192 + 5 * 8192), (5u + 2u) % 6u);
+}
+
+// Two sequential streams a partition region apart (2^36 B) read alternately:
+// with the plain map both sit in bank 0 on different rows and every access
+// reopens a row; hashed, the second stream is in bank 4 and only the two
+// first accesses open one.
+TEST(MemorySystem, BankHashKeepsInterleavedStreamsOnTheirOwnRows) {
+  for (bool hash : {false, true}) {
+    DramConfig c = roundConfig(1);
+    c.bank_hash = hash;
+    MemorySystem m(c, kRoundMhz);
+    const uint64_t other = uint64_t(1) << 36;
+    for (uint64_t i = 0; i < 128; ++i) {  // 128 x 64 B = one 8 KiB row per stream
+      m.access(i * 100, i * 64, 64, false, Surface::BlendArrays);
+      m.access(i * 100 + 50, other + i * 64, 64, false, Surface::BlendArrays);
+    }
+    EXPECT_EQ(m.bankOf(other), hash ? 4u : 0u);
+    EXPECT_EQ(m.stats().row_misses, hash ? 2u : 256u) << (hash ? "hashed" : "plain");
+    EXPECT_EQ(m.stats().row_hits, hash ? 254u : 0u) << (hash ? "hashed" : "plain");
+  }
 }
 
 TEST(MemorySystem, NonPowerOfTwoGeometryMapsConsistently) {
@@ -411,8 +464,15 @@ class ReferenceDram {
     for (uint64_t a = addr / B * B; a < addr + bytes; a += B) {
       const uint64_t ch = (a / I) % C;
       const uint64_t local = a / (I * C) * I + a % I;
-      const uint64_t bank_index = (local / R) % K;
+      uint64_t bank_index = (local / R) % K;
       const uint64_t row = local / (R * K);
+      if (c_.bank_hash) {
+        // MEMORY.md: XOR of the row's bank-sized bit groups (K a power of two),
+        // else the sum of its base-K digits, mod K.
+        const bool pow2 = (K & (K - 1)) == 0;
+        for (uint64_t r = row; r != 0; r /= K) bank_index = pow2 ? (bank_index ^ (r % K)) : bank_index + r % K;
+        bank_index %= K;
+      }
       Bank& k = banks_[ch * K + bank_index];
       uint64_t col;
       if (c_.open_row) {
@@ -485,15 +545,15 @@ struct Geometry {
 // stats field equals the burst-by-burst reference.
 TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
   const Geometry geometries[] = {
-      {1, 8, 8192, 64, 256},  // igpu-like, 1 channel
-      {2, 8, 8192, 64, 256},  // igpu
-      {4, 16, 4096, 64, 256}, // dgpu
-      {3, 6, 8192, 64, 256},  // non-power-of-two channels and banks
-      {2, 5, 320, 64, 192},   // rows of 5 bursts, chunks of 3: chunks cross rows
-      {3, 3, 128, 64, 256},   // rows shorter than a chunk
-      {4, 7, 96, 32, 96},     // row = chunk, odd everything
-      {1, 3, 192, 64, 128},   // one channel, rows not a multiple of the chunk
-      {2, 2, 64, 64, 64},     // one burst per row and per chunk
+      {1, 8, 8192, 64, 256},   // igpu-like, 1 channel
+      {2, 8, 8192, 64, 256},   // igpu
+      {4, 16, 4096, 64, 256},  // dgpu
+      {3, 6, 8192, 64, 256},   // non-power-of-two channels and banks
+      {2, 5, 320, 64, 192},    // rows of 5 bursts, chunks of 3: chunks cross rows
+      {3, 3, 128, 64, 256},    // rows shorter than a chunk
+      {4, 7, 96, 32, 96},      // row = chunk, odd everything
+      {1, 3, 192, 64, 128},    // one channel, rows not a multiple of the chunk
+      {2, 2, 64, 64, 64},      // one burst per row and per chunk
   };
   struct Timing {
     double mhz, gbps, tck, ctrl;
@@ -503,79 +563,83 @@ TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
   int cases = 0;
   for (const Geometry& g : geometries) {
     for (bool open : {true, false}) {
-      for (Cycle interval : {Cycle(0), Cycle(1), Cycle(7), Cycle(10000)}) {
-        const Timing& t = timings[cases % 3];
-        DramConfig c;
-        c.channels = g.channels;
-        c.banks = g.banks;
-        c.row_bytes = g.row_bytes;
-        c.burst_bytes = g.burst_bytes;
-        c.interleave_bytes = g.interleave_bytes;
-        c.open_row = open;
-        c.channel_gbps = t.gbps;
-        c.tck_ns = t.tck;
-        c.controller_ns = t.ctrl;
-        c.cl = 11 + unsigned(cases % 5);
-        c.trcd = 11;
-        c.trp = 9 + unsigned(cases % 7);
-        MemorySystem m(c, t.mhz);
-        ReferenceDram ref(c, m);
-        m.setSampleInterval(interval);
-        ref.setSampleInterval(interval);
-        const std::string what = std::to_string(g.channels) + " ch " + std::to_string(g.banks) + " banks row " +
-                                 std::to_string(g.row_bytes) + " il " + std::to_string(g.interleave_bytes) +
-                                 (open ? " open" : " closed") + " interval " + std::to_string(interval);
-        // A small address range (many row hits and conflicts) or a large one.
-        const uint64_t range = (cases % 2) ? (uint64_t(1) << 20) : (uint64_t(1) << 34);
-        Cycle now = 0;
-        uint64_t addr = 0;
-        uint32_t bytes = 1;
-        for (int i = 0; i < 3000; ++i) {
-          const uint64_t kind = rnd(12);
-          // 10: streaming on from the previous request, 11: the same address again.
-          if (kind == 10)
-            addr += bytes;
-          else if (kind == 9)
-            addr = rnd(range) / 2048 * 2048;
-          else if (kind != 11)
-            addr = rnd(range);
-          if (kind < 3)
-            bytes = uint32_t(1 + rnd(64));
-          else if (kind < 6)
-            bytes = uint32_t(1 + rnd(8192));
-          else
-            bytes = uint32_t(64) << rnd(6);  // 64 B .. 2 KiB
-          // Mostly forward in time, bursty, sometimes a caller up to a quantum behind.
-          const Cycle at = rnd(8) == 0 ? now - std::min<Cycle>(now, rnd(1000)) : now;
-          now += rnd(4) == 0 ? rnd(400) : 0;
-          const bool write = rnd(2) == 1;
-          const Surface s = Surface(rnd(kSurfaceCount));
-          const Cycle want = ref.access(at, addr, bytes, write, s);
-          ASSERT_EQ(m.access(at, addr, bytes, write, s), want) << what << ", request " << i;
-        }
-        expectSameStats(m.stats(), ref.stats(), what);
-        // A change of interval on the way keeps the series consistent too.
-        if (interval) {
-          m.setSampleInterval(interval * 3);
-          ref.setSampleInterval(interval * 3);
-          for (int i = 0; i < 200; ++i) {
-            addr = rnd(range);
-            bytes = uint32_t(1 + rnd(4096));
-            EXPECT_EQ(m.access(now + Cycle(i), addr, bytes, false, Surface::Colour),
-                      ref.access(now + Cycle(i), addr, bytes, false, Surface::Colour))
-                << what;
+      for (bool hash : {false, true}) {
+        for (Cycle interval : {Cycle(0), Cycle(1), Cycle(7), Cycle(10000)}) {
+          const Timing& t = timings[cases % 3];
+          DramConfig c;
+          c.channels = g.channels;
+          c.banks = g.banks;
+          c.row_bytes = g.row_bytes;
+          c.burst_bytes = g.burst_bytes;
+          c.interleave_bytes = g.interleave_bytes;
+          c.open_row = open;
+          c.bank_hash = hash;
+          c.channel_gbps = t.gbps;
+          c.tck_ns = t.tck;
+          c.controller_ns = t.ctrl;
+          c.cl = 11 + unsigned(cases % 5);
+          c.trcd = 11;
+          c.trp = 9 + unsigned(cases % 7);
+          MemorySystem m(c, t.mhz);
+          ReferenceDram ref(c, m);
+          m.setSampleInterval(interval);
+          ref.setSampleInterval(interval);
+          const std::string what = std::to_string(g.channels) + " ch " + std::to_string(g.banks) + " banks row " +
+                                   std::to_string(g.row_bytes) + " il " + std::to_string(g.interleave_bytes) +
+                                   (open ? " open" : " closed") + (hash ? " hashed" : "") + " interval " +
+                                   std::to_string(interval);
+          // A small address range (many row hits and conflicts) or a large one.
+          const uint64_t range = (cases % 2) ? (uint64_t(1) << 20) : (uint64_t(1) << 34);
+          Cycle now = 0;
+          uint64_t addr = 0;
+          uint32_t bytes = 1;
+          for (int i = 0; i < 3000; ++i) {
+            const uint64_t kind = rnd(12);
+            // 10: streaming on from the previous request, 11: the same address again.
+            if (kind == 10)
+              addr += bytes;
+            else if (kind == 9)
+              addr = rnd(range) / 2048 * 2048;
+            else if (kind != 11)
+              addr = rnd(range);
+            if (kind < 3)
+              bytes = uint32_t(1 + rnd(64));
+            else if (kind < 6)
+              bytes = uint32_t(1 + rnd(8192));
+            else
+              bytes = uint32_t(64) << rnd(6);  // 64 B .. 2 KiB
+            // Mostly forward in time, bursty, sometimes a caller up to a quantum behind.
+            const Cycle at = rnd(8) == 0 ? now - std::min<Cycle>(now, rnd(1000)) : now;
+            now += rnd(4) == 0 ? rnd(400) : 0;
+            const bool write = rnd(2) == 1;
+            const Surface s = Surface(rnd(kSurfaceCount));
+            const Cycle want = ref.access(at, addr, bytes, write, s);
+            ASSERT_EQ(m.access(at, addr, bytes, write, s), want) << what << ", request " << i;
           }
-          expectSameStats(m.stats(), ref.stats(), what + " (interval changed)");
+          expectSameStats(m.stats(), ref.stats(), what);
+          // A change of interval on the way keeps the series consistent too.
+          if (interval) {
+            m.setSampleInterval(interval * 3);
+            ref.setSampleInterval(interval * 3);
+            for (int i = 0; i < 200; ++i) {
+              addr = rnd(range);
+              bytes = uint32_t(1 + rnd(4096));
+              EXPECT_EQ(m.access(now + Cycle(i), addr, bytes, false, Surface::Colour),
+                        ref.access(now + Cycle(i), addr, bytes, false, Surface::Colour))
+                  << what;
+            }
+            expectSameStats(m.stats(), ref.stats(), what + " (interval changed)");
+          }
+          EXPECT_GT(m.stats().row_misses, 0u) << what;
+          if (open) {
+            EXPECT_GT(m.stats().row_hits, 0u) << what;
+          }
+          ++cases;
         }
-        EXPECT_GT(m.stats().row_misses, 0u) << what;
-        if (open) {
-          EXPECT_GT(m.stats().row_hits, 0u) << what;
-        }
-        ++cases;
       }
     }
   }
-  EXPECT_EQ(cases, 9 * 2 * 4);
+  EXPECT_EQ(cases, 9 * 2 * 2 * 4);
 }
 
 TEST(MemorySystem, RejectsInvalidGeometry) {
