@@ -416,8 +416,25 @@ void RopPartition::resolvePhase() {
         refused = true;
         break;
       }
-      const bool miss = r > now + cfg_.cache.hit_latency;
-      pf.push({tiles[next_issue], r, miss});
+      // The tile's other inputs are fetched with its line, and the resolve of
+      // the tile waits for all of them: the opaque colour it composites over
+      // (where an opaque fragment landed) and, for the A-buffer, its node
+      // lists (every node of the tile read once).
+      const uint32_t t = tiles[next_issue];
+      Cycle data = r;
+      if (front_.opaqueLanded()[t] != 0)
+        data = std::max(data, access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes,
+                                     false, Surface::Colour));
+      if (!s_.bounded) {
+        const uint64_t nodes = front_.tileNodes()[t];
+        if (nodes) {
+          const uint64_t bytes = nodes * kNodeBytes;
+          data = std::max(data, access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
+                                       uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays));
+          res_.node_bytes_read += bytes;
+        }
+      }
+      pf.push({t, data});
       ++next_issue;
       ++acquired;
       moved = true;
@@ -430,19 +447,7 @@ void RopPartition::resolvePhase() {
         const uint32_t t = pf.front().tile;
         pf.pop();
         uint64_t work = geo_.tilePixels();
-        if (front_.opaqueLanded()[t] != 0)
-          access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour);
-        if (!s_.bounded) {
-          // List traversal: every node of the tile's lists is read once.
-          const uint64_t nodes = front_.tileNodes()[t];
-          if (nodes) {
-            const uint64_t bytes = nodes * kNodeBytes;
-            access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
-                   uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays);
-            res_.node_bytes_read += bytes;
-          }
-          work = std::max<uint64_t>(work, nodes);
-        }
+        if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // list traversal
         computing = true;
         computing_tile = t;
         compute_done = now + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));

@@ -87,8 +87,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   };
   struct ResolveEntry {
     uint32_t tile;
-    Cycle ready;
-    bool miss;
+    Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there
   };
 
   void run();

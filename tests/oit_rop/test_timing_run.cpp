@@ -173,6 +173,31 @@ TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
   EXPECT_EQ(m.stats["memory"]["footprint"]["allocated"]["depth"].get<uint64_t>(), 4ull * W * H);
 }
 
+// The resolve of a tile starts when its inputs are there: for the A-buffer the
+// tile's node lists (12 B per node, read once). One 8x8 tile with 40 layers
+// (2560 nodes = 30 720 B) behind a 0.5 GB/s channel: the read alone takes
+// 30 720 / (0.5 GB/s / 1150 MHz) = 70 656 cycles of bus, all of which the resolve
+// waits ("cache_miss_wait"); then it computes max(64 px, 2560 nodes) at
+// blends_per_clock x fp32_rate (its layout's rows are fp32) = 0.5 per clock.
+TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
+  std::vector<Fragment> fs;
+  for (int l = 0; l < 40; ++l)
+    for (uint16_t y = 0; y < 8; ++y)
+      for (uint16_t x = 0; x < 8; ++x) fs.push_back(model::testutil::frag(x, y, 0.01f + 0.02f * l, 1, 0, 0, 0.5f));
+  RopConfig cfg = smallConfig();
+  cfg.partitions.count = 1;
+  cfg.dram.channels = 1;
+  cfg.dram.channel_gbps = 0.5;
+  const auto r = runInChild([&] { return timed("abuffer", {}, fs, 8, 8, cfg); });
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.stats["memory"]["node_pool_bytes_read"].get<uint64_t>(), 2560u * 12u);
+  const auto& resolve = r.stats["timing"]["stages"]["resolve"];
+  const double bytes_per_cycle = 0.5e9 / (cfg.clock.core_mhz * 1e6);
+  EXPECT_GE(resolve["stalls"]["cache_miss_wait"].get<uint64_t>(), uint64_t(30720 / bytes_per_cycle));
+  EXPECT_EQ(resolve["busy"].get<uint64_t>(), uint64_t(2560 / (cfg.alu.blends_per_clock * cfg.alu.fp32_rate)));
+  expectBalanced(r.stats);
+}
+
 TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   // Transparent fragments only in the top-left 16x16: 4 of 64 tiles touched.
   std::vector<Fragment> fs;
