@@ -490,6 +490,14 @@ void RopPartition::run() {
   resolvePhase();
   flushAccounts();
   res_.end = now_;
+  // Bring SystemC time up to the partition's end (it may run up to a quantum
+  // ahead): the sampler samples while any partition runs, so without this the
+  // grid points of the frame's last quantum would be missing from the series.
+  const sc_core::sc_time end = clock_.time(now_), stamp = sc_core::sc_time_stamp();
+  if (end > stamp) {
+    qk_.set(end - stamp);
+    qk_.sync();
+  }
   done_ = true;
   done_event_.notify(sc_core::SC_ZERO_TIME);
 }
