@@ -2,7 +2,11 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
+#include <charconv>
+#include <cstdint>
 #include <cstdio>
+#include <string>
+#include <system_error>
 #include <cstdlib>
 #include <stdlib.h>
 #include <exception>
@@ -29,10 +33,28 @@ extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::addConfigCommand(app);
   oit::cli::addSweepCommand(app);
   oit::cli::addReportCommand(app);
+  // CLI11 2.1 reads an unsigned option with strtoull: "-5" wraps around and a
+  // value past 2^64 - 1 saturates, both silently. Unsigned options take digits only.
+  const auto unsigned_text = CLI::Validator(
+      [](std::string& v) -> std::string {
+        uint64_t x = 0;
+        const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+        if (v.empty() || ec != std::errc() || end != v.data() + v.size())
+          return "expected a non-negative integer below 2^64, got '" + v + "'";
+        return {};
+      },
+      "UINT");
+  for (CLI::App* sub : app.get_subcommands({}))
+    for (CLI::Option* o : sub->get_options())
+      if (o->get_type_name() == "UINT") o->check(unsigned_text);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // One line naming the option, exit code 1, as for every other bad input.
+    std::fflush(stdout);
+    fmt::print(stderr, "oitsim: error: {} (see --help)\n", e.what());
+    return 1;
   } catch (const std::exception& e) {
     // Subcommand callbacks throw on bad input; the message names file, offset or option.
     std::fflush(stdout);

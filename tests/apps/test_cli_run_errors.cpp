@@ -237,5 +237,31 @@ TEST_F(CliRunErrors, ZeroWidthOrHeightIsRefusedAtTheOption) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// Unsigned options take digits only (CLI11 alone wrapped "-5" to 2^64 - 5 and
+// saturated 2^64); option errors the parser finds are one line with exit code 1
+// (CLI11's own exit codes were 104-106 with a second line), --help still 0.
+TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
+  const std::string out = dir_->file("badnum");
+  const std::pair<const char*, const char*> cases[] = {
+      {"--seed -5", "oitsim: error: --seed: expected a non-negative integer below 2^64, got '-5' (see --help)\n"},
+      {"--seed 18446744073709551616",
+       "oitsim: error: --seed: expected a non-negative integer below 2^64, got '18446744073709551616' (see --help)\n"},
+      {"-k 2.0", "oitsim: error: --layers: expected a non-negative integer below 2^64, got '2.0' (see --help)\n"},
+      {"-k 4294967296", "oitsim: error: Could not convert: --layers = 4294967296 (see --help)\n"},
+  };
+  for (const auto& [args, message] : cases) {
+    CliResult r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " " + args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_EQ(r.output, message) << args;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  CliResult r = runOitsim("gen glass -o " + dir_->file("g.oitt") + " --width 0");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --width: Value 0 not in range 1 to 65535 (see --help)\n");
+  EXPECT_EQ(runOitsim("run --help").exit_code, 0);
+  r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --seed 18446744073709551615");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 }  // namespace
 }  // namespace oit::test
