@@ -324,7 +324,10 @@ TEST(SweepErrors, FailedGeneratorShowsItsErrorAndLeavesNoHalfMadeFolder) {
                           "-o " + o + "/traces/bad.oitt` exited with code "),
             std::string::npos)
       << r.output;
-  EXPECT_NE(r.output.find("\n    The following arguments were not expected: 64 --widht"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("exited with code 1:\n    oitsim: error: The following arguments were not expected: 64 --widht "
+                          "(see --help)\n"),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(o)) << "a failed generator must not leave a half-made sweep folder";
 
   // An existing folder keeps what it had and gets nothing new.
