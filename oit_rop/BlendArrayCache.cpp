@@ -2,10 +2,30 @@
 // Policies and what counts as a hit: MEMORY.md.
 #include "oit_rop/BlendArrayCache.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <stdexcept>
 
 namespace oit::rop {
+
+CacheGeometry cacheGeometry(const CacheConfig& cache, uint32_t line_bytes) {
+  if (line_bytes == 0) throw std::invalid_argument("cache line size is 0 bytes");
+  if (cache.ways == 0) throw std::invalid_argument("cache.ways must be >= 1");
+  const uint64_t lines = cache.size_bytes / line_bytes;
+  if (lines == 0)
+    throw std::invalid_argument(fmt::format(
+        "cache.size_bytes ({}) is smaller than one line of {} bytes (one tile's blending arrays); "
+        "enlarge cache.size_bytes, or shrink the tile (partitions.tile_width / tile_height) or the arrays",
+        cache.size_bytes, line_bytes));
+  if (lines > UINT32_MAX) throw std::invalid_argument("cache.size_bytes: too many lines");
+  CacheGeometry g;
+  g.line_bytes = line_bytes;
+  g.ways = uint32_t(std::min<uint64_t>(cache.ways, lines));  // fewer lines than ways: fully associative
+  g.sets = uint32_t(lines / g.ways);                            // lines that cannot fill a set are unused
+  g.lines = g.sets * g.ways;
+  return g;
+}
 
 BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base_address,
                                  MemorySystem& memory, bool fast_clear)
@@ -14,13 +34,11 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, ui
   if (cfg.ways == 0) throw std::invalid_argument("BlendArrayCache: ways must be >= 1");
   // A zero-entry miss queue could never serve a miss: the caller would stall forever.
   if (cfg.miss_queue == 0) throw std::invalid_argument("BlendArrayCache: miss_queue must be >= 1");
-  // Capacity in lines; a cache smaller than one line still holds one line
-  // (documented in MEMORY.md) so the model always makes progress.
-  const uint64_t lines = std::max<uint64_t>(1, cfg.size_bytes / line_bytes);
-  ways_ = static_cast<uint32_t>(std::min<uint64_t>(cfg.ways, lines));  // fewer lines than ways: fully associative
-  const uint64_t sets = lines / ways_;  // a remainder of lines that cannot form a full set is dropped
-  if (sets > UINT32_MAX) throw std::invalid_argument("BlendArrayCache: too many sets");
-  sets_ = static_cast<uint32_t>(sets);
+  // Capacity in lines (one source of truth with the configuration check; a
+  // cache smaller than one line is refused, not silently enlarged).
+  const CacheGeometry g = cacheGeometry(cfg, line_bytes);
+  ways_ = g.ways;
+  sets_ = g.sets;
   if (uint64_t(sets_) * ways_ >= kInvalid) throw std::invalid_argument("BlendArrayCache: too many lines");
   lines_.assign(size_t(sets_) * ways_, Line{});
   line_of_.assign(tiles, kInvalid);

@@ -29,6 +29,16 @@ struct CacheStats {
   double hitRate() const { return accesses ? double(hits) / double(accesses) : 0.0; }
 };
 
+// Cache geometry once the algorithm fixes the line size (tile pixels x bytes per
+// pixel), as BlendArrayCache models it (MEMORY.md): ways = min(cache.ways,
+// lines), sets = lines / ways, lines = sets x ways (the rest of size_bytes
+// unused). Throws std::invalid_argument, naming cache.size_bytes, when not even
+// one line fits.
+struct CacheGeometry {
+  uint32_t line_bytes = 0, ways = 0, sets = 0, lines = 0;
+};
+CacheGeometry cacheGeometry(const CacheConfig& cache, uint32_t line_bytes);
+
 class BlendArrayCache {
  public:
   // base_address: where the full-screen arrays start in DRAM; line i (tile i)

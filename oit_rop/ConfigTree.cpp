@@ -645,19 +645,5 @@ std::string presetTableMarkdown() {
   return out;
 }
 
-CacheGeometry cacheGeometry(const CacheConfig& cache, uint32_t line_bytes) {
-  if (line_bytes == 0) throw std::invalid_argument("cache line size is 0 bytes");
-  CacheGeometry g;
-  g.line_bytes = line_bytes;
-  g.ways = cache.ways;
-  g.sets = uint32_t(cache.size_bytes / (uint64_t(line_bytes) * cache.ways));
-  g.lines = g.sets * g.ways;
-  if (g.sets == 0)
-    throw std::invalid_argument(fmt::format(
-        "cache.size_bytes ({}) holds fewer than cache.ways ({}) lines of {} bytes (one tile's arrays); "
-        "enlarge the cache, lower the ways or shrink the tile",
-        cache.size_bytes, cache.ways, line_bytes));
-  return g;
-}
 
 }  // namespace oit::rop

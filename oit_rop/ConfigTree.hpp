@@ -86,12 +86,5 @@ RopConfig resolveConfig(const std::string& preset, const std::string& config_fil
 // Markdown table of every property for all presets side by side (CONFIG.md).
 std::string presetTableMarkdown();
 
-// Cache geometry once the algorithm fixes the line size (tile pixels x bytes per
-// pixel): lines = sets x ways, the remainder of size_bytes unused. Throws
-// std::invalid_argument when not even one set fits.
-struct CacheGeometry {
-  uint32_t line_bytes = 0, ways = 0, sets = 0, lines = 0;
-};
-CacheGeometry cacheGeometry(const CacheConfig& cache, uint32_t line_bytes);
 
 }  // namespace oit::rop

@@ -122,6 +122,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   const TraceHeader& h = src.header();
   const model::DrawClassifier classes(h);
   algo.beginFrame(h);
+  // The tile cache must hold one line (a tile of the algorithm's arrays): refused
+  // here, before any work, with the option to change.
+  cacheGeometry(cfg.cache, cfg.partitions.tile_width * cfg.partitions.tile_height * algo.bytesPerPixel());
   if (opt.progress) opt.progress(0.0, "opaque");
   const model::OpaqueLayer opaque = model::buildOpaqueLayer(src, classes);
 

@@ -263,5 +263,19 @@ TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// A tile cache that cannot hold one line (8x8 pixels x k = 64 fp32 rows of
+// 20 B = 81 920 B > 64 KiB) is refused before any work, naming the option.
+TEST_F(CliRunErrors, CacheSmallerThanOneLineIsRefused) {
+  const std::string out = dir_->file("bigk");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " -a mlab -k 64 --format fp32");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: cache.size_bytes (65536) is smaller than one line of 81920 bytes (one tile's "
+                      "blending arrays); enlarge cache.size_bytes, or shrink the tile (partitions.tile_width / "
+                      "tile_height) or the arrays\n");
+  EXPECT_FALSE(fs::exists(out));
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " -a mlab -k 64 --format fp32 --set cache.size_bytes=163840");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 }  // namespace
 }  // namespace oit::test

@@ -62,9 +62,11 @@ TEST(BlendArrayCache, Geometry) {
   BlendArrayCache c(cacheOf(10, 4), kLine, 100, 0, mem, false);
   EXPECT_EQ(c.lines(), 8u);
   EXPECT_EQ(c.sets(), 2u);
-  // Smaller than one line: still one line.
+  // Smaller than one line: refused (it was modelled as one line, larger than configured).
   CacheConfig tiny = cacheOf(1, 8);
   tiny.size_bytes = kLine / 2;
+  EXPECT_THROW(BlendArrayCache(tiny, kLine, 100, 0, mem, false), std::invalid_argument);
+  tiny.size_bytes = kLine;
   BlendArrayCache d(tiny, kLine, 100, 0, mem, false);
   EXPECT_EQ(d.lines(), 1u);
   EXPECT_EQ(d.lineAddress(3), 3u * kLine);
@@ -278,7 +280,7 @@ class ReferenceCache {
   ReferenceCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base, MemorySystem& mem,
                  bool fast_clear)
       : cfg_(cfg), line_bytes_(line_bytes), base_(base), mem_(mem), fast_clear_(fast_clear), touched_(tiles, false) {
-    const uint64_t lines = std::max<uint64_t>(1, cfg.size_bytes / line_bytes);
+    const uint64_t lines = cfg.size_bytes / line_bytes;
     ways_ = uint32_t(std::min<uint64_t>(cfg.ways, lines));
     sets_ = uint32_t(lines / ways_);
     lines_.assign(size_t(sets_) * ways_, Line{});

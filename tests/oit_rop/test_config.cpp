@@ -8,6 +8,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "oit_rop/BlendArrayCache.hpp"
 #include "oit_rop/ConfigTree.hpp"
 
 using namespace oit::rop;
@@ -252,8 +253,15 @@ TEST(ConfigTree, CacheGeometry) {
   const CacheGeometry odd = cacheGeometry(igpu, 64 * 36);  // AT with N = 4: 36 bytes per pixel
   EXPECT_EQ(odd.sets, 3u);
   EXPECT_EQ(odd.lines, 24u);
-  const std::string e = errorOf([&] { cacheGeometry(igpu, 64 * 1024); });
-  EXPECT_NE(e.find("fewer than cache.ways (8) lines of 65536 bytes"), std::string::npos) << e;
+  // Fewer lines than ways: one fully associative set (6 lines of 10 KiB in 64 KiB).
+  const CacheGeometry few = cacheGeometry(igpu, 64 * 160);
+  EXPECT_EQ(few.ways, 6u);
+  EXPECT_EQ(few.sets, 1u);
+  EXPECT_EQ(few.lines, 6u);
+  EXPECT_EQ(cacheGeometry(igpu, 64 * 1024).lines, 1u);  // exactly one 64 KiB line
+  // Not even one line: refused, naming the option (was silently modelled as one line).
+  const std::string e = errorOf([&] { cacheGeometry(igpu, 64 * 1280); });
+  EXPECT_NE(e.find("cache.size_bytes (65536) is smaller than one line of 81920 bytes"), std::string::npos) << e;
 }
 
 TEST(ConfigTree, JsonNestedAndDotted) {
