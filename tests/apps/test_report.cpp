@@ -123,6 +123,14 @@ TEST_F(Report, PointsNotRunAreCountedApartFromFailures) {
   page = readText(out + "/report.html");
   EXPECT_NE(page.find("<h2>Failed points</h2>"), std::string::npos);
   EXPECT_EQ(page.find("not run"), std::string::npos);
+  // No speed-mode group (functional points only): speed.json is still an object
+  // (it held just `null`), with no rows, and the page has no speed section.
+  const nlohmann::json sp = readJson(out + "/speed.json");
+  EXPECT_TRUE(sp["rows"].empty()) << sp.dump();
+  EXPECT_TRUE(sp["modes"].empty()) << sp.dump();
+  EXPECT_FALSE(sp["goal_met"].get<bool>());
+  EXPECT_NE(sp["note"].get<std::string>().find("no speed-mode group"), std::string::npos);
+  EXPECT_EQ(page.find("Simulator speed modes"), std::string::npos);
 }
 
 }  // namespace
