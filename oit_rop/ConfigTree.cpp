@@ -335,6 +335,7 @@ Value parseText(const Property& p, std::string_view text) {
     case PropertyType::Float: {
       double d = 0;
       const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), d);
+      if (ec == std::errc::result_out_of_range && end == s.data() + s.size()) badValue(p, text, "is out of range");
       if (ec != std::errc() || end != s.data() + s.size()) badValue(p, text, "is not a number");
       return checked(p, d, text);
     }
@@ -357,6 +358,8 @@ Value parseJson(const Property& p, const nlohmann::json& j) {
         const double d = j.get<double>();
         // 65536.0 is an integer; 1e30 or 2.5 are not.
         if (d >= 0 && d < 18446744073709551616.0 && std::floor(d) == d) return checked(p, uint64_t(d), shown);
+        // A whole number past 2^64 - 1 (JSON reads it as a double) is a range error.
+        if (d >= 18446744073709551616.0 && std::isfinite(d) && std::floor(d) == d) badValue(p, shown, "is out of range");
         badValue(p, shown, "is not a non-negative integer");
       }
       break;

@@ -214,6 +214,9 @@ TEST(ConfigTree, BadValues) {
   EXPECT_NE(e.find("not a non-negative integer"), std::string::npos) << e;
   e = errorOf([&] { t.set("input.seed", "18446744073709551616"); });
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  // A number past the double range is a range error too (it said "not a number").
+  e = errorOf([&] { t.set("clock.core_mhz", "1e400"); });
+  EXPECT_EQ(e, "clock.core_mhz: '1e400' is out of range; expected a number [1, 10000] (MHz)");
   e = errorOf([&] { t.set("preset", "dgpu"); });
   EXPECT_NE(e.find("--preset"), std::string::npos) << e;
   // A failed set leaves the tree unchanged.
@@ -302,6 +305,9 @@ TEST(ConfigTree, JsonErrorsNameFileAndKey) {
   e = errorOf([&] { t.loadJson(neg.path()); });
   EXPECT_NE(e.find("key 'dram/channels'"), std::string::npos) << e;
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  TempFile huge("huge.json", R"({"input.seed": 18446744073709551616})");  // 2^64: JSON reads it as a double
+  e = errorOf([&] { t.loadJson(huge.path()); });
+  EXPECT_NE(e.find("input.seed: '1.8446744073709552e+19' is out of range"), std::string::npos) << e;
   TempFile twice("twice.json", R"({"dram": {"channels": 2}, "dram.channels": 4})");
   e = errorOf([&] { t.loadJson(twice.path()); });
   EXPECT_NE(e.find("dram.channels is given twice"), std::string::npos) << e;
