@@ -1,3 +1,7 @@
+#include <fmt/format.h>
+
+#include <stdexcept>
+#include <tuple>
 #include <string>
 
 #include "apps/Commands.hpp"
@@ -24,5 +28,22 @@ void setCommandLine(int argc, char* argv[]) {
 }
 
 const std::string& commandLine() { return g_command_line; }
+
+std::unique_ptr<FragmentSource> openTraceWithSize(const std::string& path, uint32_t width, uint32_t height) {
+  OpenOptions opts;
+  opts.width = width;
+  opts.height = height;
+  auto src = openTrace(path, opts);
+  // The reader takes --width/--height only where the trace has no size of its
+  // own; a different value given for a trace that has one would be ignored.
+  const TraceHeader& h = src->header();
+  for (const auto& [name, given, own] : {std::tuple{"--width", width, h.width}, {"--height", height, h.height}})
+    if (given != 0 && given != own)
+      throw std::invalid_argument(fmt::format(
+          "{} {}: {} gives its own frame size, {} x {} (--width and --height are for CSV traces without "
+          "'# width' / '# height' lines)",
+          name, given, path, h.width, h.height));
+  return src;
+}
 
 }  // namespace oit::cli

@@ -3,7 +3,12 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <memory>
 #include <string>
+
+#include "traces/TraceIO.hpp"
 
 namespace oit::cli {
 
@@ -21,5 +26,9 @@ void addReportCommand(CLI::App& app);  // oitsim report DIR -> DIR/report.html
 // The command line as typed (recorded in reports so a run can be repeated).
 void setCommandLine(int argc, char* argv[]);
 const std::string& commandLine();
+
+// openTrace with the --width/--height options (0 = not given); a value that
+// differs from the size the trace itself gives is an error naming the option.
+std::unique_ptr<FragmentSource> openTraceWithSize(const std::string& path, uint32_t width, uint32_t height);
 
 }  // namespace oit::cli

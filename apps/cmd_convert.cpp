@@ -16,10 +16,7 @@ struct ConvertArgs {
 
 void runConvert(const ConvertArgs& a) {
   if (a.in == a.out) throw std::invalid_argument("convert: input and output are the same file: " + a.in);
-  OpenOptions opts;
-  opts.width = a.width;
-  opts.height = a.height;
-  auto src = openTrace(a.in, opts);
+  auto src = openTraceWithSize(a.in, a.width, a.height);
   TraceHeader h = src->header();
   if (a.encoding == "fp32")
     h.encoding = ColourEncoding::Fp32;

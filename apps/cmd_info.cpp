@@ -77,10 +77,7 @@ void writeHeatmap(FragmentSource& src, const std::string& path) {
 }
 
 void runInfo(const InfoArgs& a) {
-  OpenOptions opts;
-  opts.width = a.width;
-  opts.height = a.height;
-  auto src = openTrace(a.trace, opts);
+  auto src = openTraceWithSize(a.trace, a.width, a.height);
   if (!a.heatmap.empty()) {
     writeHeatmap(*src, a.heatmap);
     src->rewind();

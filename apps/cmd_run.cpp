@@ -159,10 +159,7 @@ void runReplay(RunArgs& a) {
     }
   }
 
-  OpenOptions opts;
-  opts.width = a.width;
-  opts.height = a.height;
-  auto src = openTrace(a.trace, opts);  // header and size are validated here
+  auto src = openTraceWithSize(a.trace, a.width, a.height);  // header and size are validated here
   const TraceHeader& h = src->header();
   auto algo = model::makeAlgorithm(a.algo, a.params);
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};

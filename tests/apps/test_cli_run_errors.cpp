@@ -263,6 +263,22 @@ TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// --width/--height are for CSV traces without a size; a different size for a
+// trace that gives its own was silently ignored.
+TEST_F(CliRunErrors, FrameSizeOptionThatDisagreesWithTheTraceIsRefused) {
+  const std::string out = dir_->file("resize");
+  CliResult r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --width 1280");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --width 1280: " + trace_ + " gives its own frame size, 64 x 48 (--width and "
+                      "--height are for CSV traces without '# width' / '# height' lines)\n");
+  EXPECT_FALSE(fs::exists(out));
+  r = runOitsim("info " + trace_ + " --height 10");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("oitsim: error: --height 10: "), std::string::npos) << r.output;
+  r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --width 64 --height 48");  // agrees
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 // A tile cache that cannot hold one line (8x8 pixels x k = 64 fp32 rows of
 // 20 B = 81 920 B > 64 KiB) is refused before any work, naming the option.
 TEST_F(CliRunErrors, CacheSmallerThanOneLineIsRefused) {
