@@ -168,7 +168,7 @@ void FrontEnd::refill() {
       ++outcomes[size_t(o)];
       if (first) {
         ++dc->fragments;
-        ++dc->blended;
+        ++dc->inserted;
         if (!tile_nodes_.empty() && o == model::InsertOutcome::Stored) ++tile_nodes_[tile];
       }
     }

@@ -55,7 +55,7 @@ struct InRec {
 };
 
 struct DrawCounts {
-  uint64_t fragments = 0, culled = 0, blended = 0;  // blended = inserted (any outcome)
+  uint64_t fragments = 0, culled = 0, inserted = 0;  // inserted: reached the blend (stored, merged or discarded)
 };
 
 class FrontEnd {

@@ -315,7 +315,8 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
 
   uint32_t touched_tiles = 0, landed_tiles = 0;
   for (uint32_t t = 0; t < geo.tiles(); ++t) {
-    if (top->partition(geo.partitionOf(t)).cache().touched(t)) ++touched_tiles;
+    // Without fast clear every tile's arrays are written clear at frame start.
+    if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++touched_tiles;
     if (front.opaqueLanded()[t]) ++landed_tiles;
   }
   const uint64_t wh = uint64_t(h.width) * h.height;
@@ -368,7 +369,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   std::sort(ids.begin(), ids.end());
   for (uint32_t id : ids) {
     const DrawCounts& d = front.perDraw().at(id);
-    per_draw[std::to_string(id)] = {{"fragments", d.fragments}, {"culled", d.culled}, {"blended", d.blended}};
+    per_draw[std::to_string(id)] = {{"fragments", d.fragments}, {"culled", d.culled}, {"inserted", d.inserted}};
   }
   res.stats = {{"timing", timing}, {"fragments", fragments}, {"memory", memory}, {"lock", lockj},
                {"cache", cachej},  {"skips", skips},         {"depth", depthj},   {"alu", alu_j},

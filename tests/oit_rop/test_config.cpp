@@ -214,6 +214,11 @@ TEST(ConfigTree, BadValues) {
   EXPECT_NE(e.find("not a non-negative integer"), std::string::npos) << e;
   e = errorOf([&] { t.set("input.seed", "18446744073709551616"); });
   EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  // A stage takes at least one cycle: 0 was accepted and ran as 1.
+  e = errorOf([&] { t.set("input.latency_min", "0"); });
+  EXPECT_EQ(e, "input.latency_min: '0' is out of range; expected an integer [1, 1000000] (cycles)");
+  e = errorOf([&] { t.set("early_depth.latency", "0"); });
+  EXPECT_EQ(e, "early_depth.latency: '0' is out of range; expected an integer [1, 10000] (cycles)");
   // A number past the double range is a range error too (it said "not a number").
   e = errorOf([&] { t.set("clock.core_mhz", "1e400"); });
   EXPECT_EQ(e, "clock.core_mhz: '1e400' is out of range; expected a number [1, 10000] (MHz)");

@@ -229,6 +229,9 @@ TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   // Without fast clear every tile's arrays are written at frame start.
   const uint64_t line = on.stats["cache"]["line_bytes"];
   EXPECT_GE(off.stats["memory"]["dram_write_bytes"]["blend_arrays"].get<uint64_t>(), 64 * line);
+  // ... so the frame touched all 64 tiles' arrays (it counted only the 4 a blend wrote).
+  EXPECT_EQ(on.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 4 * line);
+  EXPECT_EQ(off.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 64 * line);
   EXPECT_EQ(on.stats["memory"]["dram_write_bytes"]["resolve"].get<uint64_t>(), 4u * 64 * 4);
 }
 
