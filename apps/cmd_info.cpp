@@ -89,7 +89,7 @@ void runInfo(const InfoArgs& a) {
   progress.finish();
   const TraceHeader& h = st.header;
   const uint64_t pixels = uint64_t(h.width) * h.height;
-  const bool csv = std::filesystem::path(a.trace).extension() == ".csv";
+  const bool csv = isCsvTracePath(a.trace);  // as the reader decides (".CSV" too)
 
   if (a.json) {
     nlohmann::json j;

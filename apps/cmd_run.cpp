@@ -159,9 +159,9 @@ void runReplay(RunArgs& a) {
     }
   }
 
+  auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
   auto src = openTraceWithSize(a.trace, a.width, a.height);  // header and size are validated here
   const TraceHeader& h = src->header();
-  auto algo = model::makeAlgorithm(a.algo, a.params);
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
 
 

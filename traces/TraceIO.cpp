@@ -62,6 +62,8 @@ bool isCsvPath(const std::string& path) {
 
 }  // namespace detail
 
+bool isCsvTracePath(const std::string& path) { return detail::isCsvPath(path); }
+
 std::unique_ptr<FragmentSource> openTrace(const std::string& path, const OpenOptions& opts) {
   if (opts.batch_records == 0) throw std::invalid_argument("OpenOptions.batch_records must be > 0");
   return detail::isCsvPath(path) ? detail::openCsvTrace(path, opts)

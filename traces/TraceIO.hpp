@@ -67,8 +67,10 @@ class FragmentSource {
   virtual void rewind() = 0;
 };
 
-// Opens a binary trace (by magic) or a CSV trace (by the .csv extension).
+// Opens a binary trace (by magic) or a CSV trace (by the .csv extension, any case).
 std::unique_ptr<FragmentSource> openTrace(const std::string& path, const OpenOptions& opts = {});
+// Whether openTrace / createTraceWriter treat `path` as CSV (".csv", any case).
+bool isCsvTracePath(const std::string& path);
 
 // Receives fragments in submission order and validates them as the reader would.
 class FragmentSink {

@@ -27,9 +27,15 @@ TEST(CliInfo, CsvStatisticsAsJson) {
   CliResult r = runOitsim("info " + dir.file("t.csv") + " --width 4 --height 2 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["format"], "csv");
   EXPECT_EQ(j["width"], 4);
   EXPECT_EQ(j["height"], 2);
   EXPECT_EQ(j["fragments"], 6);
+  // ".CSV" is read as CSV, and info says so (it called it binary).
+  writeText(dir.file("T.CSV"), kCsv);
+  CliResult upper = runOitsim("info " + dir.file("T.CSV") + " --width 4 --height 2 --json");
+  ASSERT_EQ(upper.exit_code, 0) << upper.output;
+  EXPECT_EQ(nlohmann::json::parse(upper.output)["format"], "csv");
   ASSERT_EQ(j["draws"].size(), 2u);
   EXPECT_EQ(j["draws"][0]["class"], "opaque");
   EXPECT_EQ(j["draws"][0]["fragments"], 1);

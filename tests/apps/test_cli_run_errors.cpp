@@ -279,6 +279,19 @@ TEST_F(CliRunErrors, FrameSizeOptionThatDisagreesWithTheTraceIsRefused) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// Options are checked before the trace is opened: a bad algorithm or k is
+// reported as such even when the trace does not exist (it said "cannot open").
+TEST_F(CliRunErrors, AlgorithmAndLayersAreCheckedBeforeTheTrace) {
+  const std::string missing = dir_->file("missing.oitt");
+  CliResult r = runOitsim("run -q -t " + missing + " -o " + dir_->file("o1") + " --algo foo");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("foo"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("cannot open"), std::string::npos) << r.output;
+  r = runOitsim("run -q -t " + missing + " -o " + dir_->file("o1") + " --algo mlab -k 65");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output.find("cannot open"), std::string::npos) << r.output;
+}
+
 // A tile cache that cannot hold one line (8x8 pixels x k = 64 fp32 rows of
 // 20 B = 81 920 B > 64 KiB) is refused before any work, naming the option.
 TEST_F(CliRunErrors, CacheSmallerThanOneLineIsRefused) {
