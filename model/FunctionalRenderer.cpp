@@ -66,7 +66,8 @@ bool DrawClassifier::lookupSparse(uint32_t draw) const {
   return it->second;
 }
 
-OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes) {
+OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes,
+                             const std::function<void(const Fragment&)>& on_opaque) {
   const TraceHeader& h = src.header();
   OpaqueLayer o;
   o.width = h.width;
@@ -84,6 +85,7 @@ OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes)
       ++index;
       if (!draws.isOpaque(f.draw)) continue;
       ++o.fragments;
+      if (on_opaque) on_opaque(f);
       if (f.z < o.depth[p]) {  // LESS: the first of equal depths wins
         o.depth[p] = f.z;
         o.colour[p] = Rgb{f.r, f.g, f.b};

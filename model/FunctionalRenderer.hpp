@@ -96,8 +96,11 @@ struct OpaqueLayer {
   bool landed(size_t pixel) const { return depth[pixel] != std::numeric_limits<float>::infinity(); }
 };
 // Rewinds the source and reads it once. Throws std::runtime_error for a
-// fragment outside the frame or of an unknown draw.
-OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes);
+// fragment outside the frame or of an unknown draw. `on_opaque`, when set, sees
+// every opaque fragment of that read (the timing model counts its per-partition
+// work there instead of reading the trace again).
+OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes,
+                             const std::function<void(const Fragment&)>& on_opaque = {});
 
 struct RenderProgress {
   unsigned pass;            // 0 = opaque pre-pass, 1.. = algorithm pass + 1

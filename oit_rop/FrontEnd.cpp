@@ -29,7 +29,8 @@ FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
 }
 
 FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,
-                   const model::OpaqueLayer& opaque, const FrameGeometry& geo, const RopConfig& cfg)
+                   const model::OpaqueLayer& opaque, std::vector<uint64_t> opaque_per_partition,
+                   const FrameGeometry& geo, const RopConfig& cfg)
     : src_(src),
       algo_(algo),
       classes_(classes),
@@ -58,16 +59,9 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       hiz_max_[t] = std::max(hiz_max_[t], z);
       if (opaque.landed(p)) ++landed_[t];
     }
-  // The opaque phase's work per partition: one scan of the trace.
-  opaque_per_part_.assign(geo.partitions, 0);
-  if (classes.anyOpaque()) {
-    src_.rewind();
-    ++source_reads_;
-    model::DrawRun draws(classes_);
-    for (auto b = src_.next(); !b.empty(); b = src_.next())
-      for (const Fragment& f : b)
-        if (draws.isOpaque(f.draw)) ++opaque_per_part_[geo.partitionOf(geo.tileOf(f.x, f.y))];
-  }
+  opaque_per_part_ = std::move(opaque_per_partition);
+  if (opaque_per_part_.size() != geo.partitions)
+    throw std::invalid_argument("FrontEnd: opaque_per_partition needs one count per partition");
   counts_.pass_outcomes.assign(passes_, {});
   src_.rewind();
   ++source_reads_;

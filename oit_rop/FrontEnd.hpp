@@ -61,7 +61,8 @@ struct DrawCounts {
 class FrontEnd {
  public:
   FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,
-           const model::OpaqueLayer& opaque, const FrameGeometry& geo, const RopConfig& cfg);
+           const model::OpaqueLayer& opaque, std::vector<uint64_t> opaque_per_partition, const FrameGeometry& geo,
+           const RopConfig& cfg);
 
   Fifo<InRec>& queue(unsigned partition) { return queues_[partition]; }
   bool exhausted() const { return exhausted_; }

@@ -126,10 +126,13 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   // here, before any work, with the option to change.
   cacheGeometry(cfg.cache, cfg.partitions.tile_width * cfg.partitions.tile_height * algo.bytesPerPixel());
   if (opt.progress) opt.progress(0.0, "opaque");
-  const model::OpaqueLayer opaque = model::buildOpaqueLayer(src, classes);
-
   const FrameGeometry geo(h.width, h.height, cfg.partitions);
-  FrontEnd front(src, algo, classes, opaque, geo, cfg);
+  // The opaque phase's work per partition, counted in the same read.
+  std::vector<uint64_t> opaque_per_part(geo.partitions, 0);
+  const model::OpaqueLayer opaque = model::buildOpaqueLayer(
+      src, classes, [&](const Fragment& f) { ++opaque_per_part[geo.partitionOf(geo.tileOf(f.x, f.y))]; });
+
+  FrontEnd front(src, algo, classes, opaque, std::move(opaque_per_part), geo, cfg);
   if (opt.progress) front.setProgress(opt.progress);
 
   // Address map: tile-linear surfaces, each 1 MiB aligned.

@@ -43,7 +43,8 @@ inline ChildRun runInChild(const std::function<TimingResult()>& f) {
       nlohmann::json c = {{"in", r.counts.fragments_in}, {"opaque", r.counts.opaque}, {"culled", r.counts.culled},
                           {"stored", r.counts.stored}, {"merged", r.counts.merged},
                           {"discarded", r.counts.discarded}, {"pass_outcomes", r.counts.pass_outcomes},
-                          {"bytes_read", r.counts.bytes_read}, {"bytes_written", r.counts.bytes_written}};
+                          {"bytes_read", r.counts.bytes_read}, {"bytes_written", r.counts.bytes_written},
+                          {"source_passes", r.counts.source_passes}};
       nlohmann::json head = {{"ok", true}, {"stats", r.stats}, {"counts", c}, {"w", r.image.width}, {"h", r.image.height}};
       const std::string hs = head.dump();
       const uint64_t n = hs.size();
@@ -96,6 +97,7 @@ inline ChildRun runInChild(const std::function<TimingResult()>& f) {
   cr.counts.pass_outcomes = c.at("pass_outcomes").get<std::vector<std::array<uint64_t, model::kOutcomeCount>>>();
   cr.counts.bytes_read = c.at("bytes_read");
   cr.counts.bytes_written = c.at("bytes_written");
+  cr.counts.source_passes = c.at("source_passes");
   cr.image = model::Image(head.at("w"), head.at("h"));
   std::memcpy(cr.image.pixels.data(), in.data() + 8 + n, cr.image.pixels.size() * sizeof(model::Rgb));
   return cr;
