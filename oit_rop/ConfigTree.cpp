@@ -188,6 +188,8 @@ const std::vector<Property>& registry() {
       integer("dram.cl", &R::dram, &DramConfig::cl, 1, 255, "tCK", "CAS latency"),
       integer("dram.trcd", &R::dram, &DramConfig::trcd, 1, 255, "tCK", "activate to read/write"),
       integer("dram.trp", &R::dram, &DramConfig::trp, 1, 255, "tCK", "precharge time"),
+      integer("dram.tras", &R::dram, &DramConfig::tras, 0, 255, "tCK",
+              "activate to precharge: a row stays open at least this long (0 = no limit)"),
       integer("dram.banks", &R::dram, &DramConfig::banks, 1, 256, "", "banks per channel"),
       integer("dram.row_bytes", &R::dram, &DramConfig::row_bytes, 64, 1u << 20, "bytes",
               "row-buffer size per bank (across the channel's chips)", true),

@@ -68,6 +68,7 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   cl_ticks_ = cyclesToTicks(cfg.cl * cfg.tck_ns * cycles_per_ns, kTickShift);
   trcd_ticks_ = cyclesToTicks(cfg.trcd * cfg.tck_ns * cycles_per_ns, kTickShift);
   trp_ticks_ = cyclesToTicks(cfg.trp * cfg.tck_ns * cycles_per_ns, kTickShift);
+  tras_ticks_ = cyclesToTicks(cfg.tras * cfg.tck_ns * cycles_per_ns, kTickShift);
   const double burst_cycles = cfg.burst_bytes / bytesPerCyclePerChannel();
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
   require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
@@ -102,6 +103,7 @@ double MemorySystem::controllerCycles() const { return std::ldexp(double(ctrl_ti
 double MemorySystem::clCycles() const { return std::ldexp(double(cl_ticks_), -int(kTickShift)); }
 double MemorySystem::trcdCycles() const { return std::ldexp(double(trcd_ticks_), -int(kTickShift)); }
 double MemorySystem::trpCycles() const { return std::ldexp(double(trp_ticks_), -int(kTickShift)); }
+double MemorySystem::trasCycles() const { return std::ldexp(double(tras_ticks_), -int(kTickShift)); }
 double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_), -int(kTickShift)); }
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
@@ -212,9 +214,10 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   const AddressMap map = map_;
   const bool open_row = cfg_.open_row;
   const unsigned banks = cfg_.banks;
-  const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, burst = burst_ticks_;
-  // Ticks between the bus starts of consecutive bursts of one run (see below).
-  const uint64_t step = open_row ? burst : trp + trcd + cl + burst;
+  const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, tras = tras_ticks_, burst = burst_ticks_;
+  // Closed row: activates of consecutive bursts of one run after the first two
+  // (see below) are this far apart.
+  const uint64_t act_step = std::max(trcd + cl + burst, tras) + trp;
   uint64_t* const bus_free = bus_free_.data();
   uint64_t* const busy_ticks = busy_ticks_.data();
   Cycle* const channel_busy = stats_.channel_busy.data();
@@ -231,10 +234,11 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   // - open row: the first burst hits or opens the row; the others hit it and
   //   their column command issues at the same tick (row_ready, >= arrive, does
   //   not change), so each waits only for the bus, i.e. the previous burst's end;
-  // - closed row: each further burst activates after the previous one's data
-  //   and precharge (act_ready = its end + tRP > arrive; a bank's last_end never
-  //   exceeds its channel's bus_free, so last_end is that end), so its data
-  //   comes after the bus is free: start = previous end + tRP + tRCD + CL.
+  // - closed row: each further burst activates once the previous one's data
+  //   ended and its row was open tRAS, plus tRP (a bank's last_end never
+  //   exceeds its channel's bus_free, so last_end is that data's end); its data
+  //   then starts tRCD + CL later, after the bus is free. From the second burst
+  //   on the bus never delays it, so activates are act_step apart.
   for (uint64_t b = first; b <= last;) {
     const Run run = map.locateRun(b * map.burst.d);
     const unsigned ch = run.loc.channel;
@@ -242,38 +246,58 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
     b += n;
     Bank& bank = bank_state[size_t(ch) * banks + run.loc.bank];
     uint64_t column;  // tick the run's first column command (read or write) issues
+    uint64_t act = 0;  // closed row: the first burst's activate
     if (open_row) {
       if (bank.open_row == run.loc.row) {
         ++hits;
         column = std::max(arrive, bank.row_ready);
       } else {
         ++misses;
-        // Precharge may start once the open row is active and its transfers ended.
+        // Precharge may start once the open row is active, its transfers ended
+        // and it has been open tRAS.
         uint64_t start = std::max({arrive, bank.row_ready, bank.last_end});
-        if (bank.open_row != kNoRow) start += trp;
+        if (bank.open_row != kNoRow) start = std::max(start, bank.act + tras) + trp;
         bank.open_row = run.loc.row;
+        bank.act = start;
         bank.row_ready = start + trcd;
         column = bank.row_ready;
       }
       hits += n - 1;
     } else {
       misses += n;  // every access activates its row
-      column = std::max(arrive, bank.act_ready) + trcd;
+      act = std::max(arrive, bank.act_ready);
+      column = act + trcd;
     }
     const uint64_t xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-    const uint64_t last_xfer = xfer + (n - 1) * step;
+    uint64_t last_xfer = xfer, second_xfer = 0;
+    if (open_row) {
+      last_xfer = xfer + (n - 1) * burst;
+    } else if (n > 1) {
+      const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
+      second_xfer = act1 + trcd + cl;
+      act = act1 + (n - 2) * act_step;  // the run's last activate
+      last_xfer = act + trcd + cl;
+    }
     const uint64_t end = last_xfer + burst;
     bus_free[ch] = end;
     if (sample_interval_) {
       // Usually the whole run starts in the bucket of the previous one.
       const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
-      if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_)
+      if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
         stats_.bus_bytes_per_interval[last_bucket_] += n * map.burst.d;
-      else
-        sampleBursts(xfer, n, step);
+      } else if (open_row || n == 1) {
+        sampleBursts(xfer, n, burst);
+      } else {
+        sampleBursts(xfer, 1, 0);
+        sampleBursts(second_xfer, n - 1, act_step);
+      }
     }
     bank.last_end = std::max(bank.last_end, end);
-    if (!open_row) bank.act_ready = bank.last_end + trp;  // auto-precharge after the data
+    if (!open_row) {
+      // Auto-precharge after the data, once the row was open tRAS.
+      bank.act = act;
+      bank.act_ready = std::max(bank.last_end, act + tras) + trp;
+    }
     busy_ticks[ch] += n * burst;
     channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
     done = std::max(done, end);

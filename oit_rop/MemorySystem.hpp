@@ -58,6 +58,7 @@ class MemorySystem {
   double clCycles() const;
   double trcdCycles() const;
   double trpCycles() const;
+  double trasCycles() const;
   double burstCycles() const;  // data-bus time of one burst
   // Address mapping (MEMORY.md): channel, bank and row of a byte address.
   unsigned channelOf(uint64_t addr) const;
@@ -89,6 +90,7 @@ class MemorySystem {
     uint64_t row_ready = 0;      // ticks: the open row accepts column commands
     uint64_t last_end = 0;       // ticks: end of the last data transfer of this bank
     uint64_t act_ready = 0;      // ticks: closed-row policy, precharged and ready to activate
+    uint64_t act = 0;            // ticks: the last activate (tRAS counts from it)
   };
 
   struct Location {
@@ -119,7 +121,7 @@ class MemorySystem {
 
   DramConfig cfg_;
   double core_mhz_ = 0;
-  uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, burst_ticks_ = 0;
+  uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, tras_ticks_ = 0, burst_ticks_ = 0;
   AddressMap map_;
   std::vector<uint64_t> bus_free_;    // ticks, per channel
   std::vector<uint64_t> busy_ticks_;  // ticks, per channel

@@ -40,6 +40,7 @@ RopConfig dgpu() {
   c.dram.cl = 24;
   c.dram.trcd = 24;  // read; write tRCD 20 is not modelled separately
   c.dram.trp = 24;
+  c.dram.tras = 56;
   c.dram.banks = 16;
   c.dram.row_bytes = 4096;  // 2 KiB page per x32 chip, two chips per 64-bit channel
   c.dram.burst_bytes = 64;  // BL8 x 64 bit

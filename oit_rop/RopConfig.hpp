@@ -72,6 +72,7 @@ struct DramConfig {
   double channel_gbps = 12.8;       // GB/s per channel (DDR3-1600, 64-bit)
   double tck_ns = 1.25;             // DRAM clock period
   unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
+  unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
   unsigned banks = 8;
   unsigned row_bytes = 8192;        // row-buffer size per bank
   unsigned burst_bytes = 64;        // access granularity

@@ -76,8 +76,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 13u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 46u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 14u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 47u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {

@@ -30,6 +30,7 @@ DramConfig roundConfig(unsigned channels) {
   c.open_row = true;
   c.controller_ns = 40.0;
   c.bank_hash = false;  // the hand-derived expectations use the plain [row | bank | column] map
+  c.tras = 0;           // and no tRAS limit (tRAS has its own tests)
   return c;
 }
 constexpr double kRoundMhz = 1000.0;
@@ -196,6 +197,35 @@ TEST(MemorySystem, AddressMapping) {
   EXPECT_EQ(m.bankOf(256 * 1024), 0u);
   EXPECT_EQ(m.rowOf(256 * 1024), 1u);
   EXPECT_EQ(m.channelOf(256 * 1024), 0u);
+}
+
+// tRAS: a row stays open at least tRAS after its activate. Round config with
+// tRAS = 28: row 0 of bank 0 opens at 40 (controller), its data ends at 66; a
+// conflicting row may start its precharge only at 40 + 28 = 68, not 66.
+TEST(MemorySystem, TrasDelaysThePrechargeOfAConflictingRow) {
+  for (unsigned tras : {0u, 28u}) {
+    DramConfig c = roundConfig(1);
+    c.tras = tras;
+    MemorySystem m(c, kRoundMhz);
+    EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);  // 66
+    const Cycle pre = tras ? kCtrl + tras : kCtrl + kTrcd + kCl + kBurst;               // 68 or 66
+    EXPECT_EQ(m.access(0, 65536, 64, false, Surface::Depth), pre + kTrp + kTrcd + kCl + kBurst) << tras;
+  }
+}
+
+// Closed rows: each burst of a run re-activates once the previous data ended
+// and its row was open tRAS, plus tRP. Three bursts, tRAS 40: activates at 40,
+// max(66, 80) + 11 = 91 and max(117, 131) + 11 = 142; data of the last at
+// 142 + 22 = 164 .. 168. (Without tRAS: every step is tRP + tRCD + CL + burst.)
+TEST(MemorySystem, TrasSpacesTheActivatesOfAClosedRowRun) {
+  DramConfig c = roundConfig(1);
+  c.open_row = false;
+  c.tras = 40;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 192, false, Surface::BlendArrays), 168u);
+  c.tras = 0;
+  MemorySystem none(c, kRoundMhz);
+  EXPECT_EQ(none.access(0, 0, 192, false, Surface::BlendArrays), kCtrl + 3 * (kTrcd + kCl + kBurst) + 2 * kTrp);
 }
 
 // dram.bank_hash: for a fixed row the bank map stays a bijection (a stream
@@ -445,6 +475,7 @@ class ReferenceDram {
         cl_(ticks(m.clCycles())),
         trcd_(ticks(m.trcdCycles())),
         trp_(ticks(m.trpCycles())),
+        tras_(ticks(m.trasCycles())),
         burst_(ticks(m.burstCycles())),
         bus_(c.channels, 0),
         busy_(c.channels, 0),
@@ -482,20 +513,23 @@ class ReferenceDram {
         } else {
           ++stats_.row_misses;
           uint64_t pre = std::max({arrive, k.row_ready, k.last_end});
-          k.row_ready = pre + (k.open ? trp_ : 0) + trcd_;
+          if (k.open) pre = std::max(pre, k.act + tras_) + trp_;  // tRAS, then precharge
+          k.act = pre;
+          k.row_ready = pre + trcd_;
           k.open = true;
           k.row = row;
           col = k.row_ready;
         }
       } else {
         ++stats_.row_misses;
-        col = std::max(arrive, k.act_ready) + trcd_;
+        k.act = std::max(arrive, k.act_ready);
+        col = k.act + trcd_;
       }
       const uint64_t start = std::max(col + cl_, bus_[ch]);
       const uint64_t end = start + burst_;
       bus_[ch] = end;
       k.last_end = std::max(k.last_end, end);
-      if (!c_.open_row) k.act_ready = k.last_end + trp_;
+      if (!c_.open_row) k.act_ready = std::max(k.last_end, k.act + tras_) + trp_;
       if (interval_) {
         const uint64_t bucket = (start >> 16) / interval_;
         if (bucket >= stats_.bus_bytes_per_interval.size()) stats_.bus_bytes_per_interval.resize(bucket + 1, 0);
@@ -514,10 +548,10 @@ class ReferenceDram {
   static uint64_t ticks(double cycles) { return uint64_t(std::llround(std::ldexp(cycles, 16))); }
   struct Bank {
     bool open = false;
-    uint64_t row = 0, row_ready = 0, last_end = 0, act_ready = 0;
+    uint64_t row = 0, row_ready = 0, last_end = 0, act_ready = 0, act = 0;
   };
   DramConfig c_;
-  uint64_t ctrl_, cl_, trcd_, trp_, burst_;
+  uint64_t ctrl_, cl_, trcd_, trp_, tras_, burst_;
   std::vector<uint64_t> bus_, busy_;
   std::vector<Bank> banks_;
   MemoryStats stats_;
