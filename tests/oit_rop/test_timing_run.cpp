@@ -165,6 +165,39 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
   }
 }
 
+// The DRAM bank hash keeps the A-buffer's frame nearly independent of how
+// finely the partitions interleave (sim.quantum_cycles): its per-partition node
+// pools, regions 2^36 B apart, met in one bank on different rows with the plain
+// map, so lockstep partitions (quantum 1) reopened a row at every switch.
+TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
+  // Particles: 300 transparent 16x16 quads at random places and depths over an
+  // opaque backdrop (long node lists per tile, as gen's particles scene).
+  std::vector<Fragment> fs;
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (uint16_t y = 0; y < 96; ++y)
+    for (uint16_t x = 0; x < 128; ++x)
+      fs.push_back(model::testutil::frag(x, y, 0.9f, 0.2f, 0.2f, 0.2f, 1, model::testutil::kOpaqueDraw));
+  for (int q = 0; q < 300; ++q) {
+    const uint16_t x0 = uint16_t(rng() % (128 - 16)), y0 = uint16_t(rng() % (96 - 16));
+    const float z = 0.85f * u(rng), r = u(rng), a = 0.2f + 0.6f * u(rng);
+    for (uint16_t y = y0; y < y0 + 16; ++y)
+      for (uint16_t x = x0; x < x0 + 16; ++x) fs.push_back(model::testutil::frag(x, y, z, r, 0.5f, 0.5f, a));
+  }
+  auto cycles = [&](uint64_t quantum, bool hash) {
+    RopConfig cfg = smallConfig();
+    cfg.sim.quantum_cycles = quantum;
+    cfg.dram.bank_hash = hash;
+    const auto r = runInChild([&] { return timed("abuffer", {}, fs, 128, 96, cfg); });
+    EXPECT_TRUE(r.ok) << r.error;
+    return r.ok ? r.stats["timing"]["cycles"].get<double>() : 0.0;
+  };
+  const double hashed_lockstep = cycles(1, true), hashed = cycles(200, true);
+  const double plain_lockstep = cycles(1, false), plain = cycles(200, false);
+  EXPECT_LT(std::abs(hashed - hashed_lockstep) / hashed_lockstep, 0.02);
+  EXPECT_GT(std::abs(plain - plain_lockstep) / plain_lockstep, 0.5);  // the effect the hash removes (3x here)
+}
+
 TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
   const auto fs = smallScene(W, H, 4, 21);
   model::AlgorithmParams p;
