@@ -8,6 +8,8 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 
@@ -18,6 +20,7 @@
 #include "oit_rop/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
+#include "traces/TempFiles.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::cli {
@@ -133,16 +136,74 @@ void checkOptions(const RunArgs& a) {
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
 }
 
+// The files a run writes into --out, the report last.
+constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"};
+
+// Whether two paths name the same file (existing: same inode; else same normal form).
+bool samePath(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+// Output files are staged under temporary names and renamed together at the
+// end; a run that fails or is interrupted leaves none of them behind.
+class StagedOutputs {
+ public:
+  std::string stage(const fs::path& final_path) {
+    const std::string tmp =
+        (final_path.parent_path() / fmt::format(".{}.partial.{}", final_path.filename().string(), ::getpid())).string();
+    staged_.push_back({tmp, final_path.string()});
+    registerTempFile(tmp);
+    return tmp;
+  }
+  void commit() {
+    std::vector<std::string> done;
+    for (const auto& [tmp, path] : staged_) {
+      std::error_code ec;
+      fs::rename(tmp, path, ec);
+      if (ec) {
+        const std::string why = ec.message();
+        for (const std::string& d : done) fs::remove(d, ec);  // all or none
+        throw std::runtime_error(fmt::format("{}: cannot rename {} to it: {}", path, tmp, why));
+      }
+      done.push_back(path);
+    }
+    for (const auto& [tmp, path] : staged_) unregisterTempFile(tmp);
+    staged_.clear();
+  }
+  ~StagedOutputs() {
+    for (const auto& [tmp, path] : staged_) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      unregisterTempFile(tmp);
+    }
+  }
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;
+};
+
 void runReplay(RunArgs& a) {
-  // A stale report in the output folder must never pass for this run's, also
-  // when this run fails on an option or the trace: remove it before any check.
   const fs::path out(a.out);
+  // Never overwrite or remove the input: no output may be the trace itself.
+  for (const char* name : kOutputs)
+    if (samePath(out / name, a.trace))
+      throw std::invalid_argument(fmt::format("--out {}: {} would overwrite the input trace --trace {}", a.out,
+                                              (out / name).string(), a.trace));
+  if (!a.vcd.empty() && samePath(rop::vcdFilePath(a.vcd), a.trace))
+    throw std::invalid_argument(
+        fmt::format("--vcd {}: {} is the input trace --trace {}", a.vcd, rop::vcdFilePath(a.vcd), a.trace));
+  // An earlier run's outputs in the folder must never pass for this run's, also
+  // when this run fails on an option or the trace: remove them before any check.
   std::error_code ec;
   if (fs::is_directory(out, ec)) {
-    fs::remove(out / "report.json", ec);
-    if (ec && ec != std::errc::no_such_file_or_directory)
-      throw std::invalid_argument(
-          fmt::format("--out {}: cannot remove the old report.json: {}", a.out, ec.message()));
+    for (const char* name : kOutputs) {
+      fs::remove(out / name, ec);
+      if (ec && ec != std::errc::no_such_file_or_directory)
+        throw std::invalid_argument(
+            fmt::format("--out {}: cannot remove the old {}: {}", a.out, name, ec.message()));
+    }
   }
   checkOptions(a);
   a.params.format = model::parseStorageFormat(a.format);
@@ -252,13 +313,16 @@ void runReplay(RunArgs& a) {
   }
   reports::requireFinite(j);
 
-  // Everything is known: write images first, the report last (all atomic).
+  // Everything is known: stage every file, then rename them together (the
+  // report last), so a failure or an interrupt leaves no partial set.
   fs::create_directories(out);
-  model::writePng(run.result.image, (out / "image.png").string());
-  model::writePfm(run.result.image, (out / "image.pfm").string());
-  model::writePfm(ref.result.image, (out / "reference.pfm").string());
-  model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), (out / "diff.png").string());
-  reports::writeJsonReport((out / "report.json").string(), j);
+  StagedOutputs staged;
+  model::writePng(run.result.image, staged.stage(out / "image.png"));
+  model::writePfm(run.result.image, staged.stage(out / "image.pfm"));
+  model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
+  model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
+  reports::writeJsonReport(staged.stage(out / "report.json"), j);
+  staged.commit();
 
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,

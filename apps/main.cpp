@@ -13,12 +13,14 @@
 
 #include "apps/Commands.hpp"
 #include "oit_rop/SystemcInfo.hpp"
+#include "traces/TempFiles.hpp"
 
 // libsystemc's entry (C linkage), normally called by its own main().
 extern "C" int sc_elab_and_sim(int argc, char* argv[]);
 
 extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::setCommandLine(argc, argv);
+  oit::removeTempFilesOnSignals();  // an interrupt leaves no partial outputs
   CLI::App app{"oitsim: cycle-approximate GPU ROP model for order-independent transparency"};
   app.set_version_flag("--version",
                        std::string("oitsim ") + OITSIM_VERSION + " (SystemC " + oit::rop::systemcRelease() + ")");

@@ -1,5 +1,7 @@
 #include "model/Image.hpp"
 
+#include "traces/TempFiles.hpp"
+
 #include <png.h>
 #include <unistd.h>
 
@@ -57,17 +59,25 @@ void checkFinite(const Image& img, const std::string& path) {
 // A unique temporary next to the destination, so the final rename is atomic
 // (same filesystem) and readers never see a half-written file.
 std::string tempPathFor(const std::string& path) {
-  static std::atomic<unsigned> counter{0};
-  return fmt::format("{}.tmp.{}.{}", path, ::getpid(), counter++);
+  std::string tmp = tempPathNextTo(path);
+  registerTempFile(tmp);  // removed if the process is interrupted
+  return tmp;
+}
+
+void dropTemp(const std::string& tmp) {
+  std::error_code ignored;
+  std::filesystem::remove(tmp, ignored);
+  unregisterTempFile(tmp);
 }
 
 void commitTemp(const std::string& tmp, const std::string& path) {
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
   if (ec) {
-    std::filesystem::remove(tmp, ec);
+    dropTemp(tmp);  // (its own error code: the rename's is the one to report)
     throw std::runtime_error(fmt::format("{}: cannot rename temporary file: {}", path, ec.message()));
   }
+  unregisterTempFile(tmp);
 }
 
 struct FileCloser {
@@ -140,15 +150,21 @@ void writePng(const Image& img, const std::string& path) {
 
   const std::string tmp = tempPathFor(path);
   std::unique_ptr<FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
-  if (!file)
-    throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(errno)));
+  if (!file) {
+    const int err = errno;
+    unregisterTempFile(tmp);
+    throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(err)));
+  }
 
+  errno = 0;
   const bool ok = encodePng(file.get(), img.width, img.height, rgb.data());
+  const int write_err = errno;
   const bool closed = std::fclose(file.release()) == 0;
+  const int err = closed ? write_err : errno;
   if (!ok || !closed) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(fmt::format("{}: PNG write failed", path));
+    dropTemp(tmp);
+    throw std::runtime_error(
+        fmt::format("{}: PNG write failed{}", path, err ? std::string(": ") + std::strerror(err) : std::string()));
   }
   commitTemp(tmp, path);
 }
@@ -163,7 +179,12 @@ void writePfm(const Image& img, const std::string& path) {
   const std::string tmp = tempPathFor(path);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot create {}", path, tmp));
+    if (!out) {
+      const int err = errno;
+      unregisterTempFile(tmp);
+      throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(err)));
+    }
+    errno = 0;
     out.write(header.data(), std::streamsize(header.size()));
     // Rgb is three packed floats and the host is little-endian (see
     // traces/Fragment.hpp), so the pixel array is the PFM payload as is.
@@ -173,9 +194,10 @@ void writePfm(const Image& img, const std::string& path) {
               std::streamsize(img.pixels.size() * sizeof(Rgb)));
     out.close();
     if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw std::runtime_error(fmt::format("{}: PFM write failed", path));
+      const int err = errno;  // the failing write's or close's (ENOSPC, EIO ...)
+      dropTemp(tmp);
+      throw std::runtime_error(
+          fmt::format("{}: PFM write failed{}", path, err ? std::string(": ") + std::strerror(err) : std::string()));
     }
   }
   commitTemp(tmp, path);

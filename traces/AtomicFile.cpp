@@ -9,23 +9,25 @@
 #include <cstdio>
 #include <cstring>
 
+#include "traces/TempFiles.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::detail {
 
 namespace {
-std::atomic<uint64_t> g_temp_seq{0};
+
 }
 
 AtomicFile::AtomicFile(std::string path, size_t buffer_bytes)
     : path_(std::move(path)), buf_(buffer_bytes) {
   // pid + sequence: concurrent writers (other processes, other threads) never
   // share a temporary file; O_EXCL guarantees it.
-  tmp_ = fmt::format("{}.tmp.{}.{}", path_, ::getpid(), g_temp_seq.fetch_add(1));
+  tmp_ = tempPathNextTo(path_);
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
   if (fd_ < 0)
     throw TraceError(path_, fmt::format("cannot create temporary file {}: {}", tmp_,
                                         std::strerror(errno)));
+  registerTempFile(tmp_);
 }
 
 AtomicFile::~AtomicFile() {
@@ -36,6 +38,7 @@ void AtomicFile::discard() noexcept {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
   ::unlink(tmp_.c_str());
+  unregisterTempFile(tmp_);
 }
 
 void AtomicFile::fail(const std::string& what) {
@@ -98,9 +101,11 @@ void AtomicFile::commit() {
     const int err = errno;
     ::unlink(tmp_.c_str());
     errno = err;
+    unregisterTempFile(tmp_);
     throw TraceError(path_, fmt::format("cannot rename temporary file {} to the trace path: {}",
                                         tmp_, std::strerror(err)));
   }
+  unregisterTempFile(tmp_);
   committed_ = true;
 }
 

@@ -157,7 +157,33 @@ TEST_F(CliRunErrors, FailedRunLeavesNoEarlierReport) {
     ASSERT_TRUE(fs::exists(out + "/report.json"));
     CliResult r = runOitsim("run -q -o " + out + " " + b);
     EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_FALSE(fs::exists(out + "/report.json"));
+    // None of the earlier run's files stays to pass for this run's (only
+    // report.json was removed: the old images stayed beside nothing), and no
+    // temporary or staged file is left.
+    EXPECT_TRUE(fs::is_empty(out)) << fs::begin(fs::directory_iterator(out))->path();
+  }
+}
+
+// No output may be the input trace: a --vcd or an --out file of the trace's
+// name emptied or replaced it (a 128 MB trace replaced by image.pfm).
+TEST_F(CliRunErrors, OutputsThatWouldOverwriteTheTraceAreRefused) {
+  const std::string keep = readText(trace_);
+  const std::string vcd = dir_->file("t.vcd");
+  writeText(vcd, keep);
+  CliResult r = runOitsim("run -q -t " + vcd + " -o " + dir_->file("tvv") + " --vcd " + vcd);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --vcd " + vcd + ": " + vcd + " is the input trace --trace " + vcd + "\n");
+  EXPECT_EQ(readText(vcd), keep);
+  const std::string od = dir_->file("od");
+  fs::create_directories(od);
+  for (const char* name : {"image.pfm", "report.json"}) {
+    const std::string t = od + "/" + name;
+    writeText(t, keep);
+    r = runOitsim("run -q --mode functional -t " + t + " -o " + od);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_EQ(r.output, "oitsim: error: --out " + od + ": " + t + " would overwrite the input trace --trace " + t + "\n");
+    EXPECT_EQ(readText(t), keep) << name;
+    fs::remove(t);
   }
 }
 

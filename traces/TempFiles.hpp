@@ -1,0 +1,20 @@
+// Temporary files of the process (atomic writers' "<path>.tmp.<pid>.<n>" and
+// staged outputs): registered while they exist, so an interrupt (SIGINT,
+// SIGTERM, SIGHUP) removes them before the process dies by the signal instead
+// of leaving partial files behind.
+#pragma once
+
+#include <string>
+
+namespace oit {
+
+void registerTempFile(const std::string& path);
+void unregisterTempFile(const std::string& path);
+// Installs the handlers (once; the CLI's main calls it).
+void removeTempFilesOnSignals();
+
+// A temporary name next to `path` for an atomic write: "<path>.tmp.<pid>.<n>",
+// or "<dir>/.oitsim.tmp.<pid>.<n>" when that would exceed the file-name limit.
+std::string tempPathNextTo(const std::string& path);
+
+}  // namespace oit
