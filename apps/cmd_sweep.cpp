@@ -34,7 +34,9 @@
 #include "model/OitAlgorithm.hpp"
 #include "model/StorageFormat.hpp"
 #include "oit_rop/ConfigTree.hpp"
+#include "reports/AtomicFile.hpp"
 #include "reports/JsonReport.hpp"
+#include "traces/TempFiles.hpp"
 #include "traces/gen/Scenes.hpp"
 
 extern char** environ;
@@ -442,9 +444,11 @@ Outcome spawnAndWait(const std::string& exe, const std::vector<std::string>& arg
     std::ofstream(err_file) << "cannot start " << exe << ": " << std::strerror(rc) << "\n";
     return o;
   }
+  registerChildProcess(pid);  // an interrupt of the sweep reaches it too
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
+  unregisterChildProcess(pid);
   o.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   return o;
@@ -506,11 +510,8 @@ std::string csvField(const nlohmann::json& v) {
   return q + "\"";
 }
 
-void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  f << text;
-  if (!f) throw std::runtime_error("cannot write " + path.string());
-}
+// Whole or not at all (a full disk left a truncated results.json).
+void writeText(const fs::path& path, const std::string& text) { reports::writeFileAtomically(path.string(), text); }
 
 // Runs tasks on `jobs` threads, each pulling the next index (each task waits on
 // its own child process, so threads, not cores, are the limit).
@@ -616,6 +617,11 @@ void runSweep(const SweepArgs& a) {
     const std::string dir = shellQuote((out / "points" / p.id).string());
     commands += "mkdir -p " + dir + " && " + line + " >" + dir + "/stdout.txt 2>" + dir + "/stderr.txt\n";
   }
+  // Nothing of an earlier sweep into this folder may pass for this one's, also
+  // if this one is interrupted: its tables and page go, and every point folder
+  // of this plan is emptied now (not just before the point runs).
+  for (const char* name : {"results.csv", "results.json", "report.html", "speed.json"}) fs::remove(out / name);
+  for (const auto& p : points) fs::remove_all(out / "points" / p.id);
   reports::writeJsonReport((out / "plan.json").string(), nlohmann::json::parse(plan.dump()));
   writeText(out / "commands.txt", commands);
 
@@ -723,7 +729,10 @@ int collectSweep(const std::string& dir_str, bool quiet) {
       ran = false;  // e.g. after --emit slurm, before its task ran: not a failure
     } else {
       error = tailOf(pd / "stderr.txt");
-      if (error.empty()) error = fmt::format("exit code {} and no report.json", status.value("exit_code", -1));
+      if (error.empty())
+        error = status.is_object()
+                    ? fmt::format("exit code {} and no report.json", status.value("exit_code", -1))
+                    : "no status.json and no report.json: the point started but did not finish (interrupted?)";
     }
     if (!error.empty()) {
       ++failed;

@@ -426,8 +426,19 @@ def main():
                     + ", ".join(html.escape(p["id"]) for p in not_run) + "</p>")
 
     speed = speed_modes(ok)
-    with open(os.path.join(a.dir, "speed.json"), "w") as f:
-        json.dump(speed, f, indent=1, default=lambda v: None)
+    # Whole or not at all, as every other output (temporary file, then rename).
+    speed_path = os.path.join(a.dir, "speed.json")
+    speed_tmp = f"{speed_path}.tmp.{os.getpid()}"
+    try:
+        with open(speed_tmp, "w") as f:
+            json.dump(speed, f, indent=1, default=lambda v: None)
+        try:
+            os.replace(speed_tmp, speed_path)
+        except OSError as e:  # name the file the user knows, not the temporary
+            raise OSError(e.errno, e.strerror, speed_path) from e
+    finally:
+        if os.path.exists(speed_tmp):
+            os.remove(speed_tmp)
     if speed["rows"]:
         body.append("<h2>Simulator speed modes</h2>")
         body.append(f"<p>Goal: {speed['goal']}: <b>{'met' if speed['goal_met'] else 'not met'}</b>.</p>")

@@ -1,6 +1,7 @@
 #include "traces/TempFiles.hpp"
 
 #include <fmt/format.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -17,8 +18,11 @@ namespace {
 constexpr size_t kSlots = 256;
 std::atomic<char*> g_slots[kSlots];
 std::atomic<uint64_t> g_seq{0};
+std::atomic<int> g_children[kSlots];
 
 void onSignal(int sig) {
+  for (auto& child : g_children)
+    if (const int pid = child.load(); pid > 0) ::kill(pid, sig);
   for (auto& slot : g_slots)
     if (char* p = slot.load()) ::unlink(p);
   std::signal(sig, SIG_DFL);
@@ -45,6 +49,20 @@ void unregisterTempFile(const std::string& path) {
       if (slot.compare_exchange_strong(expected, nullptr)) std::free(p);
       return;
     }
+  }
+}
+
+void registerChildProcess(int pid) {
+  for (auto& child : g_children) {
+    int expected = 0;
+    if (child.compare_exchange_strong(expected, pid)) return;
+  }
+}
+
+void unregisterChildProcess(int pid) {
+  for (auto& child : g_children) {
+    int expected = pid;
+    if (child.compare_exchange_strong(expected, 0)) return;
   }
 }
 

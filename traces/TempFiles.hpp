@@ -10,6 +10,10 @@ namespace oit {
 
 void registerTempFile(const std::string& path);
 void unregisterTempFile(const std::string& path);
+// Child processes (a sweep's points): the same signal is passed on to them first,
+// so interrupting the parent alone does not leave them running.
+void registerChildProcess(int pid);
+void unregisterChildProcess(int pid);
 // Installs the handlers (once; the CLI's main calls it).
 void removeTempFilesOnSignals();
 

@@ -131,6 +131,18 @@ TEST_F(Report, PointsNotRunAreCountedApartFromFailures) {
   EXPECT_FALSE(sp["goal_met"].get<bool>());
   EXPECT_NE(sp["note"].get<std::string>().find("no speed-mode group"), std::string::npos);
   EXPECT_EQ(page.find("Simulator speed modes"), std::string::npos);
+
+  // A point that started but never finished (interrupted: only an empty
+  // stderr.txt) is a failure with a message; the report crashed on it.
+  fs::remove_all(out + "/points/" + p1);
+  fs::create_directories(out + "/points/" + p1);
+  writeText(out + "/points/" + p1 + "/stderr.txt", "");
+  r = runOitsim("report -q " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  res = readJson(out + "/results.json");
+  EXPECT_EQ(res["points"][1]["status"], "failed");
+  EXPECT_EQ(res["points"][1]["error"],
+            "no status.json and no report.json: the point started but did not finish (interrupted?)");
 }
 
 }  // namespace

@@ -225,6 +225,19 @@ TEST(SweepErrors, RerunIntoTheSameFolderNeverShowsTheOldReport) {
   const nlohmann::json res = readJson(d.file("o") + "/results.json");
   EXPECT_EQ(res["points"][0]["status"], "failed");
   EXPECT_EQ(res["summary"]["failed"], 1);
+
+  // Once the new plan is written nothing of the earlier sweep is left, even if
+  // the new one is stopped before its points run (--emit slurm runs none): the
+  // old tables went (they showed the earlier numbers as current after an
+  // interrupted re-sweep) and so did every point folder of the plan.
+  CliResult c = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " -q");
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  ASSERT_TRUE(fs::exists(d.file("o") + "/results.json"));
+  CliResult e = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " --emit slurm");
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  EXPECT_FALSE(fs::exists(d.file("o") + "/results.json"));
+  EXPECT_FALSE(fs::exists(d.file("o") + "/results.csv"));
+  EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-t-mlab"));
 }
 
 TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
