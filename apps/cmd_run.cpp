@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 
 #include "apps/Commands.hpp"
@@ -131,6 +132,15 @@ void checkOptions(const RunArgs& a) {
   const fs::file_status st = fs::status(a.out, ec);
   if (fs::exists(st) && !fs::is_directory(st))
     throw std::invalid_argument(fmt::format("--out {}: exists and is not a directory", a.out));
+  // Writable, checked now rather than after the simulation: the folder, or the
+  // nearest part of its path that exists (where it will be created).
+  if (a.out.empty()) throw std::invalid_argument("--out: expected a folder, got an empty path");
+  fs::path probe = fs::absolute(fs::path(a.out), ec);
+  while (!probe.empty() && !fs::exists(probe, ec) && probe != probe.parent_path()) probe = probe.parent_path();
+  if (!fs::is_directory(probe, ec))
+    throw std::invalid_argument(fmt::format("--out {}: {} is not a directory", a.out, probe.string()));
+  if (::access(probe.c_str(), W_OK | X_OK) != 0)
+    throw std::invalid_argument(fmt::format("--out {}: cannot write in {}: {}", a.out, probe.string(), std::strerror(errno)));
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
@@ -315,7 +325,8 @@ void runReplay(RunArgs& a) {
 
   // Everything is known: stage every file, then rename them together (the
   // report last), so a failure or an interrupt leaves no partial set.
-  fs::create_directories(out);
+  fs::create_directories(out, ec);
+  if (ec) throw std::runtime_error(fmt::format("--out {}: cannot create the folder: {}", a.out, ec.message()));
   StagedOutputs staged;
   model::writePng(run.result.image, staged.stage(out / "image.png"));
   model::writePfm(run.result.image, staged.stage(out / "image.pfm"));

@@ -164,6 +164,17 @@ TEST_F(CliRunErrors, FailedRunLeavesNoEarlierReport) {
   }
 }
 
+// --out is checked before the simulation: an empty path, or a path through a
+// file (it failed after the run with a raw filesystem error).
+TEST_F(CliRunErrors, OutThatCannotBeAFolderIsRefusedFirst) {
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o ''");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --out: expected a folder, got an empty path\n");
+  r = runOitsim("run -q -t " + trace_ + " -o " + trace_ + "/sub");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --out " + trace_ + "/sub: " + fs::absolute(trace_).string() + " is not a directory\n");
+}
+
 // No output may be the input trace: a --vcd or an --out file of the trace's
 // name emptied or replaced it (a 128 MB trace replaced by image.pfm).
 TEST_F(CliRunErrors, OutputsThatWouldOverwriteTheTraceAreRefused) {
