@@ -216,10 +216,14 @@ TEST(SweepErrors, RerunIntoTheSameFolderNeverShowsTheOldReport) {
     "axes": {"algo": ["mlab"]}})");
   writeText(d.file("b.json"), R"({"traces": [{"path": "broken.oitt", "name": "t"}], "base": {"mode": "functional"},
     "axes": {"algo": ["mlab"]}})");
-  CliResult a = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " -q");
+  // `oitsim sweep SPEC --out o EXTRA`, always into the same folder.
+  auto sweepInto = [&](const char* spec, const std::string& extra) {
+    return runOitsim("sweep " + d.file(spec) + " --out " + d.file("o") + " " + extra);
+  };
+  CliResult a = sweepInto("a.json", "-q");
   ASSERT_EQ(a.exit_code, 0) << a.output;
   ASSERT_TRUE(fs::exists(d.file("o") + "/points/0000-t-mlab/report.json"));
-  CliResult b = runOitsim("sweep " + d.file("b.json") + " --out " + d.file("o") + " -q");
+  CliResult b = sweepInto("b.json", "-q");
   EXPECT_EQ(b.exit_code, 2) << b.output;
   EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-t-mlab/report.json"));
   const nlohmann::json res = readJson(d.file("o") + "/results.json");
@@ -230,10 +234,10 @@ TEST(SweepErrors, RerunIntoTheSameFolderNeverShowsTheOldReport) {
   // the new one is stopped before its points run (--emit slurm runs none): the
   // old tables went (they showed the earlier numbers as current after an
   // interrupted re-sweep) and so did every point folder of the plan.
-  CliResult c = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " -q");
+  CliResult c = sweepInto("a.json", "-q");
   ASSERT_EQ(c.exit_code, 0) << c.output;
   ASSERT_TRUE(fs::exists(d.file("o") + "/results.json"));
-  CliResult e = runOitsim("sweep " + d.file("a.json") + " --out " + d.file("o") + " --emit slurm");
+  CliResult e = sweepInto("a.json", "--emit slurm");
   ASSERT_EQ(e.exit_code, 0) << e.output;
   EXPECT_FALSE(fs::exists(d.file("o") + "/results.json"));
   EXPECT_FALSE(fs::exists(d.file("o") + "/results.csv"));
