@@ -194,6 +194,28 @@ class StagedOutputs {
   std::vector<std::pair<std::string, std::string>> staged_;
 };
 
+// The VCD is written in place by SystemC while the simulation runs: until the
+// whole run succeeded it counts as a temporary (removed on failure or interrupt).
+class PendingFile {
+ public:
+  explicit PendingFile(std::string path) : path_(std::move(path)) {
+    if (!path_.empty()) registerTempFile(path_);
+  }
+  void keep() {
+    if (!path_.empty()) unregisterTempFile(path_);
+    path_.clear();
+  }
+  ~PendingFile() {
+    if (path_.empty()) return;
+    std::error_code ec;
+    fs::remove(path_, ec);
+    unregisterTempFile(path_);
+  }
+
+ private:
+  std::string path_;
+};
+
 void runReplay(RunArgs& a) {
   const fs::path out(a.out);
   // Never overwrite or remove the input: no output may be the trace itself.
@@ -238,6 +260,7 @@ void runReplay(RunArgs& a) {
 
   TimedRender run;
   nlohmann::json timing_stats;
+  PendingFile vcd(a.vcd.empty() ? std::string() : rop::vcdFilePath(a.vcd));
   if (timing) {
     Progress progress(a.algo + " (timing)", !a.quiet);
     rop::TimingOptions to;
@@ -334,6 +357,7 @@ void runReplay(RunArgs& a) {
   model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
   reports::writeJsonReport(staged.stage(out / "report.json"), j);
   staged.commit();
+  vcd.keep();
 
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
