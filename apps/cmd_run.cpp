@@ -161,59 +161,29 @@ bool samePath(const fs::path& a, const fs::path& b) {
 class StagedOutputs {
  public:
   std::string stage(const fs::path& final_path) {
-    const std::string tmp =
-        (final_path.parent_path() / fmt::format(".{}.partial.{}", final_path.filename().string(), ::getpid())).string();
-    staged_.push_back({tmp, final_path.string()});
-    registerTempFile(tmp);
-    return tmp;
+    staged_.push_back({TempFile((final_path.parent_path() /
+                                 fmt::format(".{}.partial.{}", final_path.filename().string(), ::getpid()))
+                                    .string()),
+                       final_path.string()});
+    return staged_.back().first.path();
   }
   void commit() {
     std::vector<std::string> done;
     for (const auto& [tmp, path] : staged_) {
       std::error_code ec;
-      fs::rename(tmp, path, ec);
+      fs::rename(tmp.path(), path, ec);
       if (ec) {
         const std::string why = ec.message();
         for (const std::string& d : done) fs::remove(d, ec);  // all or none
-        throw std::runtime_error(fmt::format("{}: cannot rename {} to it: {}", path, tmp, why));
+        throw std::runtime_error(fmt::format("{}: cannot rename {} to it: {}", path, tmp.path(), why));
       }
       done.push_back(path);
     }
-    for (const auto& [tmp, path] : staged_) unregisterTempFile(tmp);
-    staged_.clear();
-  }
-  ~StagedOutputs() {
-    for (const auto& [tmp, path] : staged_) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      unregisterTempFile(tmp);
-    }
+    for (auto& staged : staged_) staged.first.keep();
   }
 
  private:
-  std::vector<std::pair<std::string, std::string>> staged_;
-};
-
-// The VCD is written in place by SystemC while the simulation runs: until the
-// whole run succeeded it counts as a temporary (removed on failure or interrupt).
-class PendingFile {
- public:
-  explicit PendingFile(std::string path) : path_(std::move(path)) {
-    if (!path_.empty()) registerTempFile(path_);
-  }
-  void keep() {
-    if (!path_.empty()) unregisterTempFile(path_);
-    path_.clear();
-  }
-  ~PendingFile() {
-    if (path_.empty()) return;
-    std::error_code ec;
-    fs::remove(path_, ec);
-    unregisterTempFile(path_);
-  }
-
- private:
-  std::string path_;
+  std::vector<std::pair<TempFile, std::string>> staged_;  // temporary, final path
 };
 
 void runReplay(RunArgs& a) {
@@ -260,7 +230,8 @@ void runReplay(RunArgs& a) {
 
   TimedRender run;
   nlohmann::json timing_stats;
-  PendingFile vcd(a.vcd.empty() ? std::string() : rop::vcdFilePath(a.vcd));
+  // SystemC writes the VCD in place while it runs: a temporary until the run succeeded.
+  TempFile vcd(a.vcd.empty() ? std::string() : rop::vcdFilePath(a.vcd));
   if (timing) {
     Progress progress(a.algo + " (timing)", !a.quiet);
     rop::TimingOptions to;

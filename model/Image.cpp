@@ -57,27 +57,13 @@ void checkFinite(const Image& img, const std::string& path) {
 }
 
 // A unique temporary next to the destination, so the final rename is atomic
-// (same filesystem) and readers never see a half-written file.
-std::string tempPathFor(const std::string& path) {
-  std::string tmp = tempPathNextTo(path);
-  registerTempFile(tmp);  // removed if the process is interrupted
-  return tmp;
-}
-
-void dropTemp(const std::string& tmp) {
-  std::error_code ignored;
-  std::filesystem::remove(tmp, ignored);
-  unregisterTempFile(tmp);
-}
-
-void commitTemp(const std::string& tmp, const std::string& path) {
+// (same filesystem) and readers never see a half-written file; removed unless
+// committed (also if the process is interrupted).
+void commitTemp(TempFile& tmp, const std::string& path) {
   std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    dropTemp(tmp);  // (its own error code: the rename's is the one to report)
-    throw std::runtime_error(fmt::format("{}: cannot rename temporary file: {}", path, ec.message()));
-  }
-  unregisterTempFile(tmp);
+  std::filesystem::rename(tmp.path(), path, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot rename temporary file: {}", path, ec.message()));
+  tmp.keep();
 }
 
 struct FileCloser {
@@ -148,24 +134,19 @@ void writePng(const Image& img, const std::string& path) {
     }
   }
 
-  const std::string tmp = tempPathFor(path);
-  std::unique_ptr<FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
-  if (!file) {
-    const int err = errno;
-    unregisterTempFile(tmp);
-    throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(err)));
-  }
+  TempFile tmp(tempPathNextTo(path));
+  std::unique_ptr<FILE, FileCloser> file(std::fopen(tmp.path().c_str(), "wb"));
+  if (!file)
+    throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp.path(), std::strerror(errno)));
 
   errno = 0;
   const bool ok = encodePng(file.get(), img.width, img.height, rgb.data());
   const int write_err = errno;
   const bool closed = std::fclose(file.release()) == 0;
   const int err = closed ? write_err : errno;
-  if (!ok || !closed) {
-    dropTemp(tmp);
+  if (!ok || !closed)
     throw std::runtime_error(
         fmt::format("{}: PNG write failed{}", path, err ? std::string(": ") + std::strerror(err) : std::string()));
-  }
   commitTemp(tmp, path);
 }
 
@@ -176,14 +157,11 @@ void writePfm(const Image& img, const std::string& path) {
     throw std::runtime_error(fmt::format("{}: cannot write an empty {}x{} PFM", path, img.width,
                                          img.height));
   const std::string header = fmt::format("PF\n{} {}\n-1.0\n", img.width, img.height);
-  const std::string tmp = tempPathFor(path);
+  TempFile tmp(tempPathNextTo(path));
   {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      const int err = errno;
-      unregisterTempFile(tmp);
-      throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp, std::strerror(err)));
-    }
+    std::ofstream out(tmp.path(), std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp.path(), std::strerror(errno)));
     errno = 0;
     out.write(header.data(), std::streamsize(header.size()));
     // Rgb is three packed floats and the host is little-endian (see
@@ -195,7 +173,6 @@ void writePfm(const Image& img, const std::string& path) {
     out.close();
     if (!out) {
       const int err = errno;  // the failing write's or close's (ENOSPC, EIO ...)
-      dropTemp(tmp);
       throw std::runtime_error(
           fmt::format("{}: PFM write failed{}", path, err ? std::string(": ") + std::strerror(err) : std::string()));
     }

@@ -31,7 +31,6 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, ui
                                  MemorySystem& memory, bool fast_clear)
     : cfg_(cfg), line_bytes_(line_bytes), tiles_(tiles), base_(base_address), memory_(memory), fast_clear_(fast_clear) {
   if (line_bytes == 0) throw std::invalid_argument("BlendArrayCache: line_bytes must be > 0");
-  if (cfg.ways == 0) throw std::invalid_argument("BlendArrayCache: ways must be >= 1");
   // A zero-entry miss queue could never serve a miss: the caller would stall forever.
   if (cfg.miss_queue == 0) throw std::invalid_argument("BlendArrayCache: miss_queue must be >= 1");
   // Capacity in lines (one source of truth with the configuration check; a

@@ -40,7 +40,8 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       words_(algo.stateWords()),
       passes_(algo.passes()),
       state_(size_t(geo.width) * geo.height * algo.stateWords()),
-      queues_(geo.partitions, Fifo<InRec>(1u << 12)) {
+      queues_(geo.partitions, Fifo<InRec>(1u << 12)),
+      opaque_per_part_(std::move(opaque_per_partition)) {
   const size_t pixels = size_t(geo.width) * geo.height;
   algo_.clearFrame(state_.data(), pixels);
 
@@ -59,7 +60,6 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       hiz_max_[t] = std::max(hiz_max_[t], z);
       if (opaque.landed(p)) ++landed_[t];
     }
-  opaque_per_part_ = std::move(opaque_per_partition);
   if (opaque_per_part_.size() != geo.partitions)
     throw std::invalid_argument("FrontEnd: opaque_per_partition needs one count per partition");
   counts_.pass_outcomes.assign(passes_, {});

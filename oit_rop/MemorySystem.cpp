@@ -73,6 +73,8 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
   require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
   burst_ticks_ = cyclesToTicks(burst_cycles, kTickShift);
+  // Closed row: activates of consecutive bursts of one run, after the first two, are this far apart.
+  act_step_ticks_ = std::max(trcd_ticks_ + cl_ticks_ + burst_ticks_, tras_ticks_) + trp_ticks_;
   require(burst_ticks_ >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
 
   map_.burst.set(cfg.burst_bytes);
@@ -215,9 +217,7 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   const bool open_row = cfg_.open_row;
   const unsigned banks = cfg_.banks;
   const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, tras = tras_ticks_, burst = burst_ticks_;
-  // Closed row: activates of consecutive bursts of one run after the first two
-  // (see below) are this far apart.
-  const uint64_t act_step = std::max(trcd + cl + burst, tras) + trp;
+  const uint64_t act_step = act_step_ticks_;
   uint64_t* const bus_free = bus_free_.data();
   uint64_t* const busy_ticks = busy_ticks_.data();
   Cycle* const channel_busy = stats_.channel_busy.data();

@@ -122,6 +122,7 @@ class MemorySystem {
   DramConfig cfg_;
   double core_mhz_ = 0;
   uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, tras_ticks_ = 0, burst_ticks_ = 0;
+  uint64_t act_step_ticks_ = 0;  // closed row: max(tRCD + CL + burst, tRAS) + tRP
   AddressMap map_;
   std::vector<uint64_t> bus_free_;    // ticks, per channel
   std::vector<uint64_t> busy_ticks_;  // ticks, per channel

@@ -122,11 +122,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   const TraceHeader& h = src.header();
   const model::DrawClassifier classes(h);
   algo.beginFrame(h);
-  // The tile cache must hold one line (a tile of the algorithm's arrays): refused
-  // here, before any work, with the option to change.
-  cacheGeometry(cfg.cache, cfg.partitions.tile_width * cfg.partitions.tile_height * algo.bytesPerPixel());
-  if (opt.progress) opt.progress(0.0, "opaque");
   const FrameGeometry geo(h.width, h.height, cfg.partitions);
+  const uint32_t line_bytes = geo.tilePixels() * algo.bytesPerPixel();  // one tile of the algorithm's arrays
+  // The tile cache must hold one line: refused here, before any work, with the option to change.
+  cacheGeometry(cfg.cache, line_bytes);
+  if (opt.progress) opt.progress(0.0, "opaque");
   // The opaque phase's work per partition, counted in the same read.
   std::vector<uint64_t> opaque_per_part(geo.partitions, 0);
   const model::OpaqueLayer opaque = model::buildOpaqueLayer(
@@ -137,7 +137,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
 
   // Address map: tile-linear surfaces, each 1 MiB aligned.
   AddressMap map;
-  map.line_bytes = geo.tilePixels() * algo.bytesPerPixel();
+  map.line_bytes = line_bytes;
   map.tile4_bytes = geo.tilePixels() * 4;
   map.blend_arrays = 0;
   map.depth = alignUp(uint64_t(geo.tiles()) * map.line_bytes, 1u << 20);

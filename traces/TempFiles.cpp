@@ -73,6 +73,22 @@ void removeTempFilesOnSignals() {
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, onSignal);
 }
 
+TempFile::TempFile(std::string path) : path_(std::move(path)) {
+  if (!path_.empty()) registerTempFile(path_);
+}
+
+void TempFile::keep() {
+  if (!path_.empty()) unregisterTempFile(path_);
+  path_.clear();
+}
+
+TempFile::~TempFile() {
+  if (path_.empty()) return;
+  std::error_code ignored;
+  std::filesystem::remove(path_, ignored);
+  unregisterTempFile(path_);
+}
+
 std::string tempPathNextTo(const std::string& path) {
   const std::string suffix = fmt::format(".tmp.{}.{}", ::getpid(), g_seq.fetch_add(1));
   const std::filesystem::path p(path);

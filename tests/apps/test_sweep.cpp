@@ -269,17 +269,22 @@ TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
   EXPECT_NE(r.output.find("broken.json: not valid JSON"), std::string::npos) << r.output;
 }
 
+// Sweeps the spec d/s.json into d/o and expects it refused (exit 1) with `message`
+// in the output and nothing created.
+void expectSpecRefused(const TempDir& d, const std::string& spec, const std::string& message) {
+  writeText(d.file("s.json"), spec);
+  CliResult r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("o"));
+  EXPECT_EQ(r.exit_code, 1) << spec << "\n" << r.output;
+  EXPECT_NE(r.output.find(message), std::string::npos) << spec << "\n" << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o"))) << spec << ": nothing may be created before the spec is checked";
+}
+
 TEST(SweepErrors, BadRopParameterStopsTheSweepBeforeAnyPointRuns) {
   TempDir d("sweep_rop");
-  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
-    "axes": {"sim.quantum_cycle": [1, 1000]}})");
-  CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o"));
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("s.json: axes.sim.quantum_cycle[0]: sim.quantum_cycle = 1: unknown property "
-                          "'sim.quantum_cycle'; did you mean 'sim.quantum_cycles'?"),
-            std::string::npos)
-      << r.output;
-  EXPECT_FALSE(fs::exists(d.file("o")));
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "axes": {"sim.quantum_cycle": [1, 1000]}})",
+                    "s.json: axes.sim.quantum_cycle[0]: sim.quantum_cycle = 1: unknown property "
+                    "'sim.quantum_cycle'; did you mean 'sim.quantum_cycles'?");
 }
 
 // Every value of base and of every axis is checked before anything is created
@@ -305,26 +310,18 @@ TEST(SweepErrors, EveryAxisValueIsCheckedBeforeAnythingRuns) {
   };
   for (const auto& [spec, message] : cases) {
     const bool has_base = spec.find("\"base\"") != std::string::npos;
-    writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}], )" +
-                                    std::string(has_base ? "" : R"("base": {"mode": "functional"}, )") + spec + "}");
-    CliResult r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("o"));
-    EXPECT_EQ(r.exit_code, 1) << spec << "\n" << r.output;
-    EXPECT_NE(r.output.find("oitsim: error: sweep spec " + d.file(message)), std::string::npos)
-        << spec << "\n" << r.output;
-    EXPECT_FALSE(fs::exists(d.file("o"))) << spec << ": nothing may be created before the spec is checked";
+    expectSpecRefused(d,
+                      R"({"traces": [{"gen": "glass", "width": 64, "height": 48}], )" +
+                          std::string(has_base ? "" : R"("base": {"mode": "functional"}, )") + spec + "}",
+                      "oitsim: error: sweep spec " + d.file(message));
   }
 }
 
 TEST(SweepErrors, UnknownSceneIsASpecErrorAndCreatesNothing) {
   TempDir d("sweep_scene");
-  writeText(d.file("s.json"), R"({"traces": [{"gen": "nosuch"}], "axes": {"algo": ["mlab"]}})");
-  CliResult r = runOitsim("sweep -q " + d.file("s.json") + " -o " + d.file("o"));
-  EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("oitsim: error: sweep spec " + d.file("s.json") +
-                          ": traces[0].gen: unknown scene 'nosuch' (expected particles, "),
-            std::string::npos)
-      << r.output;
-  EXPECT_FALSE(fs::exists(d.file("o")));
+  expectSpecRefused(d, R"({"traces": [{"gen": "nosuch"}], "axes": {"algo": ["mlab"]}})",
+                    "oitsim: error: sweep spec " + d.file("s.json") +
+                        ": traces[0].gen: unknown scene 'nosuch' (expected particles, ");
 }
 
 // A generator that fails when it runs: its error is shown (even with -q), nothing
