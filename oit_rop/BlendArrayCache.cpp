@@ -54,6 +54,8 @@ Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
   ++stats_.accesses;
   ++stats_.hits;
   line.stamp = ++stamp_;
+  in_use_ += line.pins == 0;
+  ++line.pins;
   if (write) {
     line.dirty = true;
     touched_[tile] = 1;
@@ -84,20 +86,32 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
     }
     if (slot == entries) {
       miss_queue_min_ = smallest;  // exact: every entry is busy until then
+      refused_by_set_ = false;
       ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
       return kNever;
     }
   }
+
+  // Victim: the first invalid way, else the least recently used of the lines
+  // out of use (a pinned line is filling or waits for its blend; evicting it
+  // would let more fills be in flight than the cache has lines). Invalid lines
+  // have stamp 0 and valid ones distinct stamps >= 1, so this is the first
+  // unpinned way with the smallest stamp.
+  const uint32_t set = tile % sets_;
+  const size_t first = size_t(set) * ways_;
+  size_t victim_index = kInvalid;
+  for (size_t i = first; i < first + ways_; ++i)
+    if (lines_[i].pins == 0 && (victim_index == kInvalid || lines_[i].stamp < lines_[victim_index].stamp))
+      victim_index = i;
+  if (victim_index == kInvalid) {
+    refused_by_set_ = true;
+    refused_set_ = set;
+    ++stats_.set_in_use;  // refused like a full miss queue: no state change
+    return kNever;
+  }
+  refused_by_set_ = false;
   ++stats_.accesses;
   ++stats_.misses;
-
-  // Victim: the first invalid way, else the least recently used. Invalid lines
-  // have stamp 0 and valid ones distinct stamps >= 1, so this is the first way
-  // with the smallest stamp.
-  const size_t first = size_t(tile % sets_) * ways_;
-  size_t victim_index = first;
-  for (size_t i = first + 1; i < first + ways_; ++i)
-    if (lines_[i].stamp < lines_[victim_index].stamp) victim_index = i;
   Line& victim = lines_[victim_index];
 
   const Cycle hit_ready = now + cfg_.hit_latency;
@@ -120,6 +134,8 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   victim.dirty = write;
   victim.stamp = ++stamp_;
   victim.ready = ready;
+  victim.pins = 1;
+  ++in_use_;
   line_of_[tile] = static_cast<uint32_t>(victim_index);
   if (write) touched_[tile] = 1;
 
@@ -127,6 +143,17 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   miss_queue_max_ = std::max(miss_queue_max_, ready);
   stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, in_flight + (ready > now ? 1u : 0u));
   return ready;
+}
+
+bool BlendArrayCache::release(uint32_t tile) {
+  const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
+  if (index == kInvalid || lines_[index].pins == 0)
+    throw std::logic_error(fmt::format("BlendArrayCache::release: tile {} has no acquire in use", tile));
+  if (--lines_[index].pins != 0) return false;
+  --in_use_;
+  if (!refused_by_set_ || index / ways_ != refused_set_) return false;
+  refused_by_set_ = false;
+  return true;
 }
 
 bool BlendArrayCache::touched(uint32_t tile) const { return tile < tiles_ && touched_[tile]; }

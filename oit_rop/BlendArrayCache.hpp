@@ -21,6 +21,7 @@ struct CacheStats {
   uint64_t clear_fills = 0;     // misses on never-written tiles served without DRAM (fast clear)
   uint64_t evictions = 0, writebacks = 0;
   uint64_t miss_queue_full = 0; // acquire() calls refused because the miss queue was full
+  uint64_t set_in_use = 0;      // misses refused because every way of the set was in use (pinned)
   uint32_t peak_misses_in_flight = 0;
   // Added: hits on a line whose fill was still in flight (counted in `hits`
   // too: the tag matched and no new DRAM traffic was made; the caller waits
@@ -49,9 +50,16 @@ class BlendArrayCache {
   // A fragment of `tile` needs its pixel's array at cycle `now`. Returns the
   // cycle the line is available (hit: now + hit_latency; miss: when the fill
   // arrives, after any dirty victim was written back), or kNever when the miss
-  // queue is full (the caller stalls and retries: "cache-miss queue full").
-  // `write` marks the line dirty and the tile touched.
+  // queue is full or every way of the tile's set is in use (the caller stalls
+  // and retries: refusedBySet() tells which). `write` marks the line dirty and
+  // the tile touched. An accepted acquire pins the line: it is in use (no
+  // victim) until the caller's release() of the tile, so a line is never
+  // evicted while its fill is in flight or before its blend wrote it.
   Cycle acquire(Cycle now, uint32_t tile, bool write);
+  // The use of one acquire() of `tile` ended (its blend or resolve is done).
+  // Returns true when this made a line of the set of the last refusedBySet()
+  // acquire free (the refused access may now be retried).
+  bool release(uint32_t tile);
 
   bool touched(uint32_t tile) const;
   bool resident(uint32_t tile) const;
@@ -68,6 +76,11 @@ class BlendArrayCache {
   // After acquire() returned kNever: the cycle the first miss-queue entry frees
   // (an acquire before it would be refused again). Unspecified otherwise.
   Cycle missQueueFreesAt() const { return miss_queue_min_; }
+  // After acquire() returned kNever: true when the set had no line out of use
+  // (a retry can succeed only after a release()), false when the miss queue
+  // was full (a retry can succeed at missQueueFreesAt()).
+  bool refusedBySet() const { return refused_by_set_; }
+  uint32_t linesInUse() const { return in_use_; }  // lines pinned by acquires not yet released
 
  private:
   static constexpr uint32_t kInvalid = ~uint32_t(0);
@@ -76,6 +89,7 @@ class BlendArrayCache {
     bool dirty = false;
     uint64_t stamp = 0;  // LRU: larger = more recently used; 0 only while invalid
     Cycle ready = 0;     // cycle the line's data is available
+    uint32_t pins = 0;   // acquires of this line whose use has not ended (no victim while > 0)
   };
   Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident
 
@@ -98,6 +112,9 @@ class BlendArrayCache {
   // The smallest miss_queue_ entry as of the last refused acquire (missQueueFreesAt).
   Cycle miss_queue_min_ = 0;
   uint64_t stamp_ = 0;
+  bool refused_by_set_ = false;
+  uint32_t refused_set_ = 0;  // set of the last acquire refused by its set
+  uint32_t in_use_ = 0;  // lines with pins > 0
   CacheStats stats_;
 };
 

@@ -155,6 +155,10 @@ void RopPartition::nodeWrite() {
   }
 }
 
+void RopPartition::releaseLine(uint32_t tile) {
+  if (cache_.release(tile)) retry_at_ = 0;  // the refused access's set has a line out of use now
+}
+
 void RopPartition::refillInput() {
   auto& q = front_.queue(id_);
   while (q.empty() && front_.canRefill()) front_.refill();
@@ -166,10 +170,12 @@ bool RopPartition::acquireGated(Cycle now, uint32_t tile, bool write, Cycle& rea
   // until the first entry frees, so the refusals counted (cache.miss_queue_full:
   // one per access that had to wait) and the cycle the access goes through do
   // not depend on how often the partition is evaluated (skip.idle_cycles).
+  // A set with every way in use is retried after the release that frees one
+  // of its lines (releaseLine), also independent of how often we ask.
   if (now < retry_at_) return false;
   ready = cache_.acquire(now, tile, write);
   if (ready != kNever) return true;
-  retry_at_ = cache_.missQueueFreesAt();
+  retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
   return false;
 }
 
@@ -182,6 +188,7 @@ bool RopPartition::transparentStep() {
   alu_.complete(now, [&](uint32_t t) {
     moved = true;
     const TokenInfo& k = tok_[t];
+    releaseLine(k.tile);  // the blend wrote the line: it may be evicted now
     if (!s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
       nodeWrite();
     if (cfg_.lock.release == LockRelease::EndOfShader)
@@ -402,6 +409,7 @@ void RopPartition::resolvePhase() {
     const Cycle now = now_;
     bool moved = false;
     if (computing && now >= compute_done) {
+      releaseLine(computing_tile);
       access(now, s_.map.colour + uint64_t(computing_tile) * s_.map.tile4_bytes, s_.map.tile4_bytes, true,
              Surface::Resolve);
       computing = false;

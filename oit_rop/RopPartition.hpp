@@ -117,6 +117,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   void waitForFrontEnd();
   void resolvePhase();
   void release(uint32_t token);
+  void releaseLine(uint32_t tile);  // BlendArrayCache::release, re-enabling a set-refused retry
   void nodeWrite();
   void refillInput();
   // BlendArrayCache::acquire, not called before retry_at_ (false: refused; ready: when the line is there).
@@ -141,7 +142,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
-  Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees
+  Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees (kNever: until a line of the set is released)
   unsigned cache_ports_;
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)

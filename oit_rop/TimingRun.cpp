@@ -219,6 +219,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     cache.evictions += c.evictions;
     cache.writebacks += c.writebacks;
     cache.miss_queue_full += c.miss_queue_full;
+    cache.set_in_use += c.set_in_use;
     cache.peak_misses_in_flight = std::max(cache.peak_misses_in_flight, c.peak_misses_in_flight);
     const EarlyDepthStats& d = p.earlyDepth().stats();
     depth.tested += d.tested;
@@ -354,6 +355,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"hits", cache.hits},                   {"misses", cache.misses},
                  {"clear_fills", cache.clear_fills},     {"evictions", cache.evictions},
                  {"writebacks", cache.writebacks},       {"miss_queue_full", cache.miss_queue_full},
+                 {"set_in_use", cache.set_in_use},
                  {"peak_misses_in_flight", cache.peak_misses_in_flight}, {"line_bytes", map.line_bytes}};
   json skips = {{"early_depth_culled", culled_early},
                 {"late_culled", culled_late},

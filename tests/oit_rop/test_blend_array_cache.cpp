@@ -38,10 +38,19 @@ CacheConfig cacheOf(uint32_t lines, unsigned ways, unsigned miss_queue = 16, uns
   return c;
 }
 
+// One access whose use ends at once (acquire, then release when accepted):
+// for the tests of LRU, fills and the miss queue, where no line stays in use.
+// (Lines in use are the subject of the LinesInUse tests below.)
+Cycle use(BlendArrayCache& cache, Cycle now, uint32_t tile, bool write) {
+  const Cycle t = cache.acquire(now, tile, write);
+  if (t != kNever) cache.release(tile);
+  return t;
+}
+
 // Acquire like a pipeline would: on kNever, retry one cycle later.
 Cycle acquireRetrying(BlendArrayCache& cache, Cycle& now, uint32_t tile, bool write) {
   for (;;) {
-    const Cycle t = cache.acquire(now, tile, write);
+    const Cycle t = use(cache, now, tile, write);
     if (t != kNever) return t;
     ++now;
   }
@@ -75,8 +84,8 @@ TEST(BlendArrayCache, Geometry) {
 TEST(BlendArrayCache, HitLatencyAndMissLatency) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(16, 4), kLine, 64, 0, mem, false);
-  EXPECT_EQ(cache.acquire(0, 0, false), 78u);         // fill from DRAM
-  EXPECT_EQ(cache.acquire(500, 0, false), 510u);      // hit: now + hit_latency
+  EXPECT_EQ(use(cache, 0, 0, false), 78u);         // fill from DRAM
+  EXPECT_EQ(use(cache, 500, 0, false), 510u);      // hit: now + hit_latency
   EXPECT_TRUE(cache.resident(0));
   EXPECT_FALSE(cache.resident(1));
 }
@@ -84,11 +93,11 @@ TEST(BlendArrayCache, HitLatencyAndMissLatency) {
 TEST(BlendArrayCache, DirtyVictimIsWrittenBackBeforeTheLineIsAvailable) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(1, 1), kLine, 64, 0, mem, false);
-  EXPECT_EQ(cache.acquire(0, 0, true), 78u);
+  EXPECT_EQ(use(cache, 0, 0, true), 78u);
   // At 1000: write-back of tile 0 (row 0 open: 40 + CL 11 + 16 -> 1067), then
   // the fill of tile 1 (same row; its column read issues at 1040 but the bus
   // is booked until 1067) -> 1083.
-  EXPECT_EQ(cache.acquire(1000, 1, false), 1083u);
+  EXPECT_EQ(use(cache, 1000, 1, false), 1083u);
   EXPECT_EQ(mem.stats().write_bytes[unsigned(Surface::BlendArrays)], kLine);
   EXPECT_EQ(mem.stats().read_bytes[unsigned(Surface::BlendArrays)], 2 * kLine);
   EXPECT_EQ(cache.stats().evictions, 1u);
@@ -136,7 +145,7 @@ TEST(BlendArrayCache, ArraysThatFitMissOnlyOnce) {
   EXPECT_EQ(cache.stats().misses, 16u);
   EXPECT_EQ(cache.stats().hits, 0u);
   now += 1000;
-  for (uint32_t t = 0; t < 16; ++t, ++now) EXPECT_EQ(cache.acquire(now, t, false), now + 10) << t;
+  for (uint32_t t = 0; t < 16; ++t, ++now) EXPECT_EQ(use(cache, now, t, false), now + 10) << t;
   EXPECT_EQ(cache.stats().misses, 16u);
   EXPECT_EQ(cache.stats().hits, 16u);
   EXPECT_EQ(cache.stats().evictions, 0u);
@@ -147,15 +156,15 @@ TEST(BlendArrayCache, LruVictimInATwoWaySet) {
   // 4 lines, 2 ways -> 2 sets; even tiles share set 0.
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(4, 2), kLine, 64, 0, mem, true);
-  cache.acquire(0, 1, false);  // set 1, must stay untouched by set 0's traffic
-  cache.acquire(1, 0, false);
-  cache.acquire(2, 2, false);
-  cache.acquire(3, 0, false);  // hit: 0 becomes most recent, 2 is LRU
-  cache.acquire(4, 4, false);  // evicts 2
+  use(cache, 0, 1, false);  // set 1, must stay untouched by set 0's traffic
+  use(cache, 1, 0, false);
+  use(cache, 2, 2, false);
+  use(cache, 3, 0, false);  // hit: 0 becomes most recent, 2 is LRU
+  use(cache, 4, 4, false);  // evicts 2
   EXPECT_TRUE(cache.resident(0));
   EXPECT_FALSE(cache.resident(2));
   EXPECT_TRUE(cache.resident(4));
-  cache.acquire(5, 2, false);  // now 0 (used at 3) is older than 4 (used at 4)
+  use(cache, 5, 2, false);  // now 0 (used at 3) is older than 4 (used at 4)
   EXPECT_FALSE(cache.resident(0));
   EXPECT_TRUE(cache.resident(2));
   EXPECT_TRUE(cache.resident(4));
@@ -167,8 +176,8 @@ TEST(BlendArrayCache, LruVictimInATwoWaySet) {
 TEST(BlendArrayCache, LruInAFullyAssociativeCache) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(3, 8), kLine, 64, 0, mem, true);  // 3 lines, 1 set
-  for (uint32_t t : {0u, 1u, 2u, 0u}) cache.acquire(t, t, false);
-  cache.acquire(10, 3, false);  // LRU is 1
+  for (uint32_t t : {0u, 1u, 2u, 0u}) use(cache, t, t, false);
+  use(cache, 10, 3, false);  // LRU is 1
   EXPECT_FALSE(cache.resident(1));
   EXPECT_TRUE(cache.resident(0));
   EXPECT_TRUE(cache.resident(2));
@@ -202,8 +211,8 @@ TEST(BlendArrayCache, WriteBackGoesToTheVictimsAddress) {
     d.interleave_bytes = kLine;
     MemorySystem mem(d, kMhz);
     BlendArrayCache cache(cacheOf(1, 1), kLine, 64, base, mem, true);
-    cache.acquire(0, 1, true);   // clear fill, dirty
-    cache.acquire(10, 2, false); // clear fill; evicts dirty tile 1 -> write base + 256
+    use(cache, 0, 1, true);   // clear fill, dirty
+    use(cache, 10, 2, false); // clear fill; evicts dirty tile 1 -> write base + 256
     const unsigned ch = unsigned((base / kLine + 1) % 2);
     EXPECT_EQ(mem.stats().channel_busy[ch], 16u) << base;
     EXPECT_EQ(mem.stats().channel_busy[1 - ch], 0u) << base;
@@ -214,17 +223,17 @@ TEST(BlendArrayCache, WriteBackGoesToTheVictimsAddress) {
 TEST(BlendArrayCache, FastClearFirstTouchNeedsNoDramRead) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(4, 2), kLine, 64, 0, mem, true);
-  for (uint32_t t = 0; t < 4; ++t) EXPECT_EQ(cache.acquire(100 + t, t, t % 2 == 0), 110u + t);
+  for (uint32_t t = 0; t < 4; ++t) EXPECT_EQ(use(cache, 100 + t, t, t % 2 == 0), 110u + t);
   EXPECT_EQ(mem.stats().readBytes(), 0u);
   EXPECT_EQ(cache.stats().clear_fills, 4u);
   EXPECT_EQ(cache.stats().misses, 4u);
   // Tile 0 was written: after eviction its next miss must read it back.
   // Set 0 holds 0 and 2; 4 evicts 0 (LRU, dirty), 6 evicts 2 (dirty).
-  cache.acquire(200, 4, false);
-  cache.acquire(201, 6, false);
+  use(cache, 200, 4, false);
+  use(cache, 201, 6, false);
   EXPECT_FALSE(cache.resident(0));
   EXPECT_EQ(mem.stats().write_bytes[unsigned(Surface::BlendArrays)], 2u * kLine);
-  const Cycle t = cache.acquire(1000, 0, false);  // evicts clean 4
+  const Cycle t = use(cache, 1000, 0, false);  // evicts clean 4
   EXPECT_GT(t, 1000u + 40u);  // a real DRAM fill, not a clear one
   EXPECT_EQ(mem.stats().read_bytes[unsigned(Surface::BlendArrays)], kLine);
   EXPECT_EQ(cache.stats().clear_fills, 6u);
@@ -242,18 +251,18 @@ TEST(BlendArrayCache, WithoutFastClearFirstTouchReadsALine) {
 TEST(BlendArrayCache, MissQueueFullRefusesAndCounts) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/2), kLine, 64, 0, mem, false);
-  EXPECT_EQ(cache.acquire(0, 0, false), 78u);
-  EXPECT_EQ(cache.acquire(0, 1, false), 94u);  // same row, queued 16 cycles behind on the bus
+  EXPECT_EQ(use(cache, 0, 0, false), 78u);
+  EXPECT_EQ(use(cache, 0, 1, false), 94u);  // same row, queued 16 cycles behind on the bus
   EXPECT_EQ(cache.missesInFlight(0), 2u);
-  EXPECT_EQ(cache.acquire(0, 2, false), kNever);
-  EXPECT_EQ(cache.acquire(77, 2, false), kNever);
+  EXPECT_EQ(use(cache, 0, 2, false), kNever);
+  EXPECT_EQ(use(cache, 77, 2, false), kNever);
   EXPECT_EQ(cache.stats().miss_queue_full, 2u);
   EXPECT_EQ(cache.stats().accesses, 2u);  // refusals are not accesses
   EXPECT_FALSE(cache.resident(2));
   // A hit still goes through while the queue is full (it waits for its fill).
-  EXPECT_EQ(cache.acquire(1, 0, false), 78u);
+  EXPECT_EQ(use(cache, 1, 0, false), 78u);
   // At 78 tile 0's fill has arrived: its entry is free again.
-  EXPECT_EQ(cache.acquire(78, 2, false), 145u);  // column at 118 + CL = 129, + 16
+  EXPECT_EQ(use(cache, 78, 2, false), 145u);  // column at 118 + CL = 129, + 16
   EXPECT_EQ(cache.stats().misses, 3u);
   EXPECT_EQ(cache.stats().peak_misses_in_flight, 2u);
   EXPECT_EQ(mem.stats().read_bytes[unsigned(Surface::BlendArrays)], 3u * kLine);
@@ -262,9 +271,9 @@ TEST(BlendArrayCache, MissQueueFullRefusesAndCounts) {
 TEST(BlendArrayCache, HitUnderMissWaitsForTheFillAndCountsAsHit) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(16, 4), kLine, 16, 0, mem, false);
-  EXPECT_EQ(cache.acquire(0, 5, false), 78u);
-  EXPECT_EQ(cache.acquire(1, 5, true), 78u);
-  EXPECT_EQ(cache.acquire(70, 5, false), 80u);  // fill done by then + hit latency
+  EXPECT_EQ(use(cache, 0, 5, false), 78u);
+  EXPECT_EQ(use(cache, 1, 5, true), 78u);
+  EXPECT_EQ(use(cache, 70, 5, false), 80u);  // fill done by then + hit latency
   EXPECT_EQ(cache.stats().hits, 2u);
   EXPECT_EQ(cache.stats().hits_under_miss, 1u);
   EXPECT_EQ(cache.stats().misses, 1u);
@@ -422,7 +431,7 @@ TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
         const bool write = rnd(3) != 0;
         const Cycle at = rnd(50) == 0 ? now - std::min<Cycle>(now, rnd(300)) : now;
         const Cycle want = ref.acquire(at, tile, write);
-        ASSERT_EQ(cache.acquire(at, tile, write), want) << what << ", acquire " << i;
+        ASSERT_EQ(use(cache, at, tile, write), want) << what << ", acquire " << i;
         refused += want == kNever;
         now += rnd(3);
         if (rnd(64) == 0) now += rnd(500);
@@ -463,16 +472,16 @@ TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
 TEST(BlendArrayCache, FirstInvalidWayThenLeastRecentlyUsed) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(4, 4), kLine, 16, 0, mem, true);  // one set of 4 ways
-  cache.acquire(0, 0, false);
-  cache.acquire(1, 1, false);
-  cache.acquire(2, 0, false);  // hit
-  cache.acquire(3, 2, false);
-  cache.acquire(4, 3, false);  // fills the last invalid way: no eviction yet
+  use(cache, 0, 0, false);
+  use(cache, 1, 1, false);
+  use(cache, 2, 0, false);  // hit
+  use(cache, 3, 2, false);
+  use(cache, 4, 3, false);  // fills the last invalid way: no eviction yet
   EXPECT_EQ(cache.stats().evictions, 0u);
-  cache.acquire(5, 4, false);  // LRU is 1 (used at 1; 0 was used again at 2)
+  use(cache, 5, 4, false);  // LRU is 1 (used at 1; 0 was used again at 2)
   EXPECT_FALSE(cache.resident(1));
-  cache.acquire(6, 2, false);  // hit: now 0 is LRU
-  cache.acquire(7, 5, false);
+  use(cache, 6, 2, false);  // hit: now 0 is LRU
+  use(cache, 7, 5, false);
   EXPECT_FALSE(cache.resident(0));
   for (uint32_t t : {2u, 3u, 4u, 5u}) EXPECT_TRUE(cache.resident(t)) << t;
   EXPECT_EQ(cache.stats().evictions, 2u);
@@ -485,20 +494,20 @@ TEST(BlendArrayCache, MissQueueEntriesFreeByTimeAndPeakCountsBusyOnes) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/3), kLine, 64, 0, mem, true);
   // Fast clear: fills are ready at now + 10.
-  EXPECT_EQ(cache.acquire(100, 0, false), 110u);
-  EXPECT_EQ(cache.acquire(100, 1, false), 110u);
-  EXPECT_EQ(cache.acquire(105, 2, false), 115u);
+  EXPECT_EQ(use(cache, 100, 0, false), 110u);
+  EXPECT_EQ(use(cache, 100, 1, false), 110u);
+  EXPECT_EQ(use(cache, 105, 2, false), 115u);
   EXPECT_EQ(cache.stats().peak_misses_in_flight, 3u);
-  EXPECT_EQ(cache.acquire(109, 3, false), kNever);
+  EXPECT_EQ(use(cache, 109, 3, false), kNever);
   EXPECT_EQ(cache.missesInFlight(109), 3u);
   EXPECT_EQ(cache.missesInFlight(110), 1u);
   // At 110 entries 0 and 1 are free: entry 0 takes the new miss (ready 120).
-  EXPECT_EQ(cache.acquire(110, 3, false), 120u);
+  EXPECT_EQ(use(cache, 110, 3, false), 120u);
   EXPECT_EQ(cache.missesInFlight(110), 2u);
   // Back in time to 108: entry 1 (110) and entry 2 (115) are busy, entry 0 (120)
   // too: refused.
-  EXPECT_EQ(cache.acquire(108, 4, false), kNever);
-  EXPECT_EQ(cache.acquire(116, 4, false), 126u);  // entries 1 and 2 free: entry 1
+  EXPECT_EQ(use(cache, 108, 4, false), kNever);
+  EXPECT_EQ(use(cache, 116, 4, false), 126u);  // entries 1 and 2 free: entry 1
   EXPECT_EQ(cache.missesInFlight(116), 2u);        // 120 and 126
   EXPECT_EQ(cache.missesInFlight(111), 3u);        // 115 (entry 2) as well
   EXPECT_EQ(cache.stats().miss_queue_full, 2u);
@@ -508,7 +517,7 @@ TEST(BlendArrayCache, MissQueueEntriesFreeByTimeAndPeakCountsBusyOnes) {
 TEST(BlendArrayCache, RejectsBadInput) {
   MemorySystem mem(roundDram(), kMhz);
   BlendArrayCache cache(cacheOf(4, 2), kLine, 8, 0, mem, true);
-  EXPECT_THROW(cache.acquire(0, 8, false), std::out_of_range);
+  EXPECT_THROW(use(cache, 0, 8, false), std::out_of_range);
   EXPECT_THROW(BlendArrayCache(cacheOf(4, 2, 0), kLine, 8, 0, mem, true), std::invalid_argument);
   EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), 0, 8, 0, mem, true), std::invalid_argument);
 }
@@ -527,7 +536,7 @@ TEST(BlendArrayCache, Deterministic) {
     for (int i = 0; i < 50000; ++i) {
       x = x * 6364136223846793005ull + 1442695040888963407ull;
       const uint32_t tile = uint32_t((x >> 33) % 512);  // 512 tiles vs 64 lines
-      const Cycle t = cache.acquire(now, tile, (x >> 3) & 1);
+      const Cycle t = use(cache, now, tile, (x >> 3) & 1);
       sum = sum * 1315423911u + t;
       now += (t == kNever) ? 7 : 1;
     }
@@ -562,5 +571,67 @@ TEST(BlendArrayCache, ExactlyFittingCacheMissesEachTileOnceInRasterOrder) {
   EXPECT_EQ(cache.stats().evictions, 0u);
 }
 
+
+// A line in use (acquired, release() not yet called: its fill is in flight or
+// its blend has not written it) is never a victim. Audit: the victim used to be
+// the plain LRU line, so a 2-line cache had 16 fills in flight and fragments
+// blended into lines already written back.
+TEST(BlendArrayCache, LinesInUseAreNeverVictims) {
+  MemorySystem mem(roundDram(), kMhz);
+  BlendArrayCache cache(cacheOf(2, 2), kLine, 8, 0, mem, false);  // one set of 2 ways
+  const Cycle r0 = cache.acquire(0, 0, true);
+  const Cycle r1 = cache.acquire(1, 1, true);
+  ASSERT_NE(r0, kNever);
+  ASSERT_NE(r1, kNever);
+  EXPECT_EQ(cache.linesInUse(), 2u);
+  // Both ways in use: tile 2 is refused (not counted as an access) and the
+  // refusal says the set, not the miss queue, is why.
+  EXPECT_EQ(cache.acquire(2, 2, true), kNever);
+  EXPECT_TRUE(cache.refusedBySet());
+  EXPECT_EQ(cache.stats().set_in_use, 1u);
+  EXPECT_EQ(cache.stats().accesses, 2u);
+  EXPECT_TRUE(cache.resident(0));
+  EXPECT_TRUE(cache.resident(1));
+  // A hit on a line in use is fine (no victim needed) and pins it once more.
+  EXPECT_NE(cache.acquire(3, 1, false), kNever);
+  // Releasing tile 1 once leaves it in use (two acquires); the second release
+  // frees it, which the refused set is told about.
+  EXPECT_FALSE(cache.release(1));
+  EXPECT_TRUE(cache.release(1));
+  EXPECT_EQ(cache.linesInUse(), 1u);
+  const Cycle r2 = cache.acquire(r1 + 1, 2, true);
+  ASSERT_NE(r2, kNever);
+  EXPECT_FALSE(cache.resident(1));  // the line out of use went, though 0 is older
+  EXPECT_TRUE(cache.resident(0));
+  EXPECT_EQ(cache.stats().evictions, 1u);
+  EXPECT_EQ(cache.stats().writebacks, 1u);
+  // Releasing a tile with no acquire in use is a caller bug.
+  EXPECT_THROW(cache.release(1), std::logic_error);
+  EXPECT_THROW(cache.release(5), std::logic_error);
+}
+
+// Fills in flight never exceed the cache's lines, however long the miss queue.
+TEST(BlendArrayCache, MissesInFlightNeverExceedTheLines) {
+  MemorySystem mem(roundDram(), kMhz);
+  BlendArrayCache cache(cacheOf(2, 2, 64), kLine, 64, 0, mem, false);
+  std::vector<std::pair<Cycle, uint32_t>> pending;  // (ready, tile) of accepted acquires
+  Cycle now = 0;
+  for (uint32_t i = 0; i < 60; ++now) {
+    // Uses end 5 cycles after the line arrived (the blend), oldest first.
+    while (!pending.empty() && pending.front().first + 5 <= now) {
+      cache.release(pending.front().second);
+      pending.erase(pending.begin());
+    }
+    const uint32_t tile = i % 6;
+    const Cycle r = cache.acquire(now, tile, true);
+    if (r == kNever) continue;
+    pending.push_back({r, tile});
+    ++i;
+    EXPECT_LE(cache.missesInFlight(now), 2u) << now;
+  }
+  EXPECT_LE(cache.stats().peak_misses_in_flight, 2u);
+  EXPECT_GT(cache.stats().set_in_use, 0u);
+  EXPECT_EQ(cache.stats().accesses, 60u);
+}
 }  // namespace
 }  // namespace oit::rop

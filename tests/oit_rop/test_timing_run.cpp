@@ -312,6 +312,35 @@ TEST(TimingRun, ExactlyFittingCacheMissesEachTileOnce) {
   }
 }
 
+// Audit: 30 fragments visiting tiles 0, 1, 2 in turn through a 2-line cache
+// (one set, 2 ways). Every access misses (LRU over 3 tiles in 2 lines), but
+// the lines whose fills were in flight used to be the victims, so 16 fills
+// were in flight in a 2-line cache. A line in use (fill in flight or blend not
+// done) is never a victim now: at most 2 fills in flight, and the third tile
+// waits for a line ("set_in_use").
+TEST(TimingRun, CacheNeverHasMoreFillsInFlightThanLines) {
+  std::vector<Fragment> fs;
+  for (int i = 0; i < 30; ++i)
+    fs.push_back(model::testutil::frag(uint16_t(8 * (i % 3) + (i / 3) % 8), 0, 0.5f - 0.001f * float(i), 0.5f, 0.2f,
+                                       0.1f, 0.4f, model::testutil::kTranspDraw, uint32_t(i)));
+  RopConfig cfg = smallConfig();
+  cfg.partitions.count = 1;
+  cfg.cache.size_bytes = 1024;  // 2 lines of 512 B (8x8 px x 8 B, k = 1)
+  cfg.cache.ways = 2;
+  cfg.input.latency_model = LatencyModel::Fixed;
+  model::AlgorithmParams p;
+  p.layers = 1;
+  p.format = model::StorageFormat::Rgba8T8Z32;
+  const auto r = runInChild([&] { return timed("mlab", p, fs, 24, 8, cfg); });
+  ASSERT_TRUE(r.ok) << r.error;
+  const auto& c = r.stats["cache"];
+  EXPECT_EQ(c["line_bytes"].get<uint64_t>(), 512u);
+  EXPECT_EQ(c["accesses"].get<uint64_t>(), 33u);  // 30 fragments + 3 resolve reads, all misses
+  EXPECT_EQ(c["misses"].get<uint64_t>(), 33u);
+  EXPECT_LE(c["peak_misses_in_flight"].get<uint64_t>(), 2u);
+  EXPECT_GT(c["set_in_use"].get<uint64_t>(), 0u);
+}
+
 // Throughput: bench/bench_timing.cpp (speed goals live in bench/, not in tests).
 
 // The VCD's DRAM signal is the time series' dram_bytes (bytes the buses moved
