@@ -249,14 +249,18 @@ class Hybrid final : public SortedRows {
       storeRow(F, fr, w + p * rowWords(F));
     }
     if (out.z == kInf) return InsertOutcome::Stored;
-    // The overflowing row joins the tail (Listing 2; a row whose stored T
-    // rounded to 1 adds nothing, as in the paper).
-    if (out.t != 1.0f) {
+    // The overflowing row joins the tail (Listing 2). A row whose stored T
+    // rounded to 1 may still hold colour (fp16 keeps a premultiplied colour of
+    // 2e-4 but rounds T = 1 - 2e-4 to 1): its alpha enters as max(r, g, b), a
+    // lower bound (premultiplied colour <= alpha), so its colour is kept to
+    // first order instead of dropped. Only an empty row adds nothing.
+    const float alpha = out.t != 1.0f ? 1.0f - out.t : std::max({out.r, out.g, out.b});
+    if (alpha > 0.0f) {
       HybridTail t = loadTail(w + tail_at_);
       t.r += out.r;
       t.g += out.g;
       t.b += out.b;
-      t.alpha_sum += 1.0f - out.t;
+      t.alpha_sum += alpha;
       if (t.count < UINT32_MAX) ++t.count;
       storeTail(w + tail_at_, t);
     }

@@ -556,3 +556,22 @@ TEST(Stochastic, SeedChangesNoiseNotDeterminism) {
     EXPECT_NE(i1.pixels, render(name, b, fs, 16, 16).image.pixels) << name;
   }
 }
+
+// hybrid fp16: 1000 fragments of a = 2e-4, sent back to front, so each older
+// core row falls into the tail. fp16 rounds T = 1 - 2e-4 to 1 (the spacing
+// below 1 is 2^-11) but keeps the premultiplied colour 2e-4; the tail used to
+// drop such rows and the pixel came out (0.0002, ...), 900x too dark. Exact:
+// 1 - 0.9998^1000 = 0.18129 times the colour (1, .5, .25).
+TEST(Hybrid, Fp16TailKeepsRowsWhoseTRoundedToOne) {
+  std::vector<Fragment> fs;
+  for (int i = 0; i < 1000; ++i) fs.push_back(frag(0, 0, 1.0f - float(i) / 1000.0f, 1, 0.5f, 0.25f, 0.0002f, 1, uint32_t(i)));
+  const float exact = 1.0f - float(std::pow(0.9998, 1000.0));
+  for (StorageFormat f : {StorageFormat::Fp32, StorageFormat::Fp16}) {
+    const Rgb got = render("hybrid", layers(2, f), fs, 1, 1).image.pixels[0];
+    // fp16's packed tail (10-bit colour ratio, fp16 alpha_sum) costs ~1 %.
+    const float tol = f == StorageFormat::Fp32 ? 1e-4f : 0.01f;
+    EXPECT_NEAR(got.r, exact, tol) << int(f);
+    EXPECT_NEAR(got.g, exact * 0.5f, tol) << int(f);
+    EXPECT_NEAR(got.b, exact * 0.25f, tol) << int(f);
+  }
+}

@@ -98,12 +98,14 @@ struct RefPixel {
     }
     for (unsigned i = first; i < rows; ++i) encodeRow(fmt, b[i], words.data() + i * rw());
     if (algo == "hybrid" && cur.z != kInf) {
-      if (cur.t != 1.0f) {
+      // ALGORITHMS.md: alpha 1 - T, or max(r, g, b) when T rounded to 1; an empty row adds nothing.
+      const float alpha = cur.t != 1.0f ? 1.0f - cur.t : std::max({cur.r, cur.g, cur.b});
+      if (alpha > 0.0f) {
         HybridTail t = loadTail();
         t.r += cur.r;
         t.g += cur.g;
         t.b += cur.b;
-        t.alpha_sum += 1.0f - cur.t;
+        t.alpha_sum += alpha;
         if (t.count < UINT32_MAX) ++t.count;
         storeTail(t);
       }
