@@ -498,6 +498,16 @@ void ConfigTree::validate() const {
   if (c.input.latency_model == LatencyModel::Uniform && c.input.latency_min > c.input.latency_max)
     errs.push_back(fmt::format("input.latency_min ({}) > input.latency_max ({}) with the uniform latency model",
                                c.input.latency_min, c.input.latency_max));
+  // A 2x2 quad must lie inside one tile (tile sizes are powers of two, so at
+  // least 2 suffices): tiles are interleaved over the
+  // partitions, each with its own scoreboard, so a quad straddling two tiles
+  // would be locked in parts (audit: 1x1 tiles gave pixel-granularity waits).
+  if (c.lock.granularity == LockGranularity::Quad &&
+      (c.partitions.tile_width < 2 || c.partitions.tile_height < 2))
+    errs.push_back(fmt::format(
+        "lock.granularity quad needs partitions.tile_width and tile_height of at least 2 (now {} x {}): a 2x2 quad "
+        "across two tiles would be split over partitions and locked in parts",
+        c.partitions.tile_width, c.partitions.tile_height));
   // Each way must hold whole lines even for the smallest array (4 bytes per
   // pixel); cacheGeometry() settles the real line size once the algorithm is known.
   const uint64_t min_set = uint64_t(c.cache.ways) * c.partitions.tile_width * c.partitions.tile_height * 4;

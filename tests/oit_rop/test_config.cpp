@@ -239,6 +239,23 @@ TEST(ConfigTree, CrossFieldValidation) {
   t.set("alu.fp16_rate", "1");
   EXPECT_NO_THROW(t.validate());
 
+  // Quad locks need tiles of whole quads (sizes are powers of two: at least 2).
+  ConfigTree q = ConfigTree::forPreset("igpu");
+  q.set("lock.granularity", "quad");
+  q.set("partitions.tile_width", "1");
+  q.set("partitions.tile_height", "1");
+  q.set("cache.size_bytes", "4096");
+  e = errorOf([&] { q.validate(); });
+  EXPECT_NE(e.find("lock.granularity quad needs partitions.tile_width and tile_height of at least 2 (now 1 x 1)"),
+            std::string::npos) << e;
+  q.set("partitions.tile_width", "2");
+  q.set("partitions.tile_height", "4");
+  EXPECT_NO_THROW(q.validate());
+  q.set("partitions.tile_width", "1");
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.set("lock.granularity", "pixel");  // any tile size for pixel and tile locks
+  EXPECT_NO_THROW(q.validate());
+
   ConfigTree c = ConfigTree::forPreset("igpu");
   c.set("cache.size_bytes", "3000");
   e = errorOf([&] { c.validate(); });
