@@ -306,9 +306,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   // The sampler stops when the last partition is done, at or before the frame's
   // end: one more sample at the end cycle holds the rest of the bus bytes (so the
   // series adds up to every byte moved, and a frame shorter than one interval
-  // still has one sample). Nothing is in flight then.
+  // still has one sample, an empty one of 0 cycles too). Nothing is in flight then.
   const Cycle last_sampled = sampled ? top->samples().back().cycle : 0;
-  if (cycles > last_sampled) {
+  if (cycles > last_sampled || series.empty()) {
     uint64_t rest = 0;
     for (size_t i = sampled; i < bus.size(); ++i) rest += bus[i];
     series.push_back({{"cycle", cycles}, {"dram_bytes", rest}, {"scoreboard_occupancy", 0}, {"lock_waiters", 0}});

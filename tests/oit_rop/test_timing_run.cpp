@@ -341,6 +341,18 @@ TEST(TimingRun, CacheNeverHasMoreFillsInFlightThanLines) {
   EXPECT_GT(c["set_in_use"].get<uint64_t>(), 0u);
 }
 
+// An empty trace is a frame of 0 cycles; its series still has the one last
+// sample REPORT.md promises (audit: "samples": []).
+TEST(TimingRun, EmptyFrameHasOneSample) {
+  const auto r = runInChild([&] { return timed("mlab", model::testutil::layers(4), {}, 16, 8, smallConfig()); });
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.stats["timing"]["cycles"].get<uint64_t>(), 0u);
+  const auto& samples = r.stats["timeseries"]["samples"];
+  ASSERT_EQ(samples.size(), 1u);
+  EXPECT_EQ(samples[0]["cycle"].get<uint64_t>(), 0u);
+  EXPECT_EQ(samples[0]["dram_bytes"].get<uint64_t>(), 0u);
+}
+
 // Throughput: bench/bench_timing.cpp (speed goals live in bench/, not in tests).
 
 // The VCD's DRAM signal is the time series' dram_bytes (bytes the buses moved
