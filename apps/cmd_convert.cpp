@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "apps/Commands.hpp"
+#include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "traces/TraceIO.hpp"
 
@@ -15,7 +16,8 @@ struct ConvertArgs {
 };
 
 void runConvert(const ConvertArgs& a) {
-  if (a.in == a.out) throw std::invalid_argument("convert: input and output are the same file: " + a.in);
+  // The same file also through a symlink or another spelling of the path.
+  checkNotInput("output", a.out, "trace", a.in);
   auto src = openTraceWithSize(a.in, a.width, a.height);
   TraceHeader h = src->header();
   if (a.encoding == "fp32")

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "apps/Commands.hpp"
+#include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "traces/TraceIO.hpp"
 #include "traces/gen/Mesh.hpp"
@@ -64,6 +65,9 @@ void runGen(GenArgs& a, bool has_az, bool has_el, bool has_fov, bool has_alpha) 
   o.shading = a.shading == "constant" ? gen::Shading::Constant : gen::Shading::Lambert;
   o.encoding = a.encoding == "unorm8" ? ColourEncoding::Unorm8 : ColourEncoding::Fp32;
 
+  // Never overwrite the mesh being read (a named mesh is its installed file).
+  const gen::NamedMesh* named = gen::findNamedMesh(o.mesh);
+  checkNotInput("-o", a.output, "mesh --mesh", named ? named->path : o.mesh);
   const auto start = std::chrono::steady_clock::now();
   gen::SceneGenerator generator(a.scene, o);  // validates before any file is created
   std::unique_ptr<FragmentSink> writer = createTraceWriter(a.output, generator.header());

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "apps/Commands.hpp"
+#include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "model/Image.hpp"
 #include "traces/TraceStats.hpp"
@@ -77,6 +78,7 @@ void writeHeatmap(FragmentSource& src, const std::string& path) {
 }
 
 void runInfo(const InfoArgs& a) {
+  if (!a.heatmap.empty()) checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
   auto src = openTraceWithSize(a.trace, a.width, a.height);
   if (!a.heatmap.empty()) {
     writeHeatmap(*src, a.heatmap);

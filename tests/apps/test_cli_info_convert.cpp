@@ -105,5 +105,34 @@ TEST(CliInfo, TruncatedBinaryFailsNamingByteOffset) {
   EXPECT_NE(r.output.find("byte offset " + std::to_string(cut)), std::string::npos) << r.output;
 }
 
+// No output may be the input trace: not the same path string, not another
+// spelling of it, not a symlink to it (the input survives byte for byte).
+TEST(CliInfoConvert, OutputsNeverOverwriteTheInput) {
+  TempDir dir("out_is_input");
+  ASSERT_EQ(runOitsim("gen glass -q -o " + dir.file("s.oitt") + " --width 64 --height 48").exit_code, 0);
+  const std::string original = readText(dir.file("s.oitt"));
+  std::filesystem::create_symlink("s.oitt", dir.path() / "link.oitt");
+  const std::string dotted = (dir.path() / "." / "s.oitt").string();
+
+  CliResult heat = runOitsim("info " + dir.file("s.oitt") + " --heatmap " + dotted);
+  EXPECT_EQ(heat.exit_code, 1) << heat.output;
+  EXPECT_NE(heat.output.find("--heatmap " + dotted + ": is the input trace"), std::string::npos) << heat.output;
+  EXPECT_EQ(lines(heat.output).size(), 1u) << heat.output;
+  CliResult heat_link = runOitsim("info " + dir.file("s.oitt") + " --heatmap " + dir.file("link.oitt"));
+  EXPECT_EQ(heat_link.exit_code, 1) << heat_link.output;
+  EXPECT_NE(heat_link.output.find("--heatmap"), std::string::npos) << heat_link.output;
+
+  for (const std::string& out : {dotted, dir.file("link.oitt"), dir.file("s.oitt")}) {
+    CliResult r = runOitsim("convert " + dir.file("s.oitt") + " " + out);
+    EXPECT_EQ(r.exit_code, 1) << out << ": " << r.output;
+    EXPECT_NE(r.output.find("output " + out + ": is the input trace"), std::string::npos) << r.output;
+  }
+  EXPECT_TRUE(readText(dir.file("s.oitt")) == original) << "the input trace was changed";
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.path() / "link.oitt"));
+  // A different file is fine.
+  EXPECT_EQ(runOitsim("info " + dir.file("s.oitt") + " --heatmap " + dir.file("h.pfm")).exit_code, 0);
+  EXPECT_EQ(runOitsim("convert " + dir.file("s.oitt") + " " + dir.file("c.oitt")).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace oit::test
