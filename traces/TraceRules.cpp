@@ -220,6 +220,44 @@ std::optional<std::string> drawNameProblem(const std::string& name) {
     if (c < 0x20 || c == 0x7F)
       return fmt::format("name contains control byte 0x{:02X} at index {}", c, i);
   }
+  if (auto bad = invalidUtf8At(name))
+    return fmt::format("name is not valid UTF-8: byte 0x{:02X} at index {} does not begin a well-formed "
+                       "character",
+                       static_cast<unsigned char>(name[*bad]), *bad);
+  return std::nullopt;
+}
+
+std::optional<size_t> invalidUtf8At(std::string_view s) {
+  // Well-formed UTF-8 (Unicode table 3-7): no overlong forms, no surrogates,
+  // nothing above U+10FFFF.
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    size_t n = 0;
+    unsigned char lo = 0x80, hi = 0xBF;  // range of the second byte
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2;
+      if (c == 0xE0) lo = 0xA0;
+      if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3;
+      if (c == 0xF0) lo = 0x90;
+      if (c == 0xF4) hi = 0x8F;
+    } else {
+      return i;
+    }
+    if (i + n >= s.size()) return i;  // cut short by the end
+    for (size_t k = 1; k <= n; ++k) {
+      const auto b = static_cast<unsigned char>(s[i + k]);
+      if (k == 1 ? (b < lo || b > hi) : (b < 0x80 || b > 0xBF)) return i;
+    }
+    i += n + 1;
+  }
   return std::nullopt;
 }
 

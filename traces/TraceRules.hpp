@@ -9,6 +9,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "traces/Fragment.hpp"
@@ -68,8 +69,11 @@ std::optional<std::string> unitMessage(format_v1::Field f, float v);
 // Validates a header given to a writer; throws TraceError naming `file`, the
 // binary byte offset of the field and the field.
 void checkHeaderForWrite(const std::string& file, const TraceHeader& h);
-// Checks a draw name (length, no control bytes); returns the problem or nullopt.
+// Checks a draw name (length, no control bytes, valid UTF-8); returns the problem or nullopt.
 std::optional<std::string> drawNameProblem(const std::string& name);
+// Index of the first byte of s that does not start a well-formed UTF-8
+// character (no overlong forms, surrogates or code points above U+10FFFF), or nullopt.
+std::optional<size_t> invalidUtf8At(std::string_view s);
 // Checks camera planes; returns the problem or nullopt.
 std::optional<std::string> cameraProblem(float near_plane, float far_plane);
 

@@ -134,5 +134,34 @@ TEST(CliInfoConvert, OutputsNeverOverwriteTheInput) {
   EXPECT_EQ(runOitsim("convert " + dir.file("s.oitt") + " " + dir.file("c.oitt")).exit_code, 0);
 }
 
+// A draw name that is not UTF-8 is refused by every command with the same
+// located message (info and convert passed it on; info --json and run then
+// failed with a bare "[json.exception.type_error.316]" naming no file).
+TEST(CliInfoConvert, NonUtf8DrawNameIsRefusedEverywhere) {
+  TempDir dir("bad_utf8");
+  ASSERT_EQ(runOitsim("gen glass -q -o " + dir.file("g.oitt") + " --width 64 --height 48").exit_code, 0);
+  std::string bytes = readText(dir.file("g.oitt"));
+  bytes[72] = '\xFF';  // first byte of draw 0's name
+  writeText(dir.file("bad.oitt"), bytes);
+  writeText(dir.file("bad.csv"), "# width 4\n# height 2\n# draw 1 transparent \"\xC3\x28\"\n" + std::string(kCsv));
+  const std::string bin_msg = dir.file("bad.oitt") +
+                              ": byte offset 72, field draw[0].name: name is not valid UTF-8: byte 0xFF at index 0";
+  const std::string csv_msg = dir.file("bad.csv") +
+                              ": line 3, byte offset 42, field draw: name is not valid UTF-8: byte 0xC3 at index 0";
+  for (const auto& [file, msg] : {std::pair{dir.file("bad.oitt"), bin_msg}, {dir.file("bad.csv"), csv_msg}}) {
+    for (const std::string& cmd :
+         {"info " + file, "info --json " + file, "convert " + file + " " + dir.file("out.oitt"),
+          "convert " + file + " " + dir.file("out.csv"), "run --mode functional --trace " + file + " --out " + dir.file("r"),
+          "run --trace " + file + " --out " + dir.file("r")}) {
+      CliResult r = runOitsim(cmd);
+      EXPECT_EQ(r.exit_code, 1) << cmd << "\n" << r.output;
+      EXPECT_NE(r.output.find(msg), std::string::npos) << cmd << "\n" << r.output;
+      EXPECT_EQ(r.output.find("json.exception"), std::string::npos) << cmd << "\n" << r.output;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.oitt")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.csv")));
+}
+
 }  // namespace
 }  // namespace oit::test

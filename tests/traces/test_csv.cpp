@@ -298,6 +298,8 @@ TEST_F(Csv, HeaderAndMetadataErrors) {
       {"# draw 1 opaque a\n" + cols, 1, "a\n", "draw", "expected the draw name in double quotes"},
       {"# draw 1 opaque \"a\\n\"\n" + cols, 1, "\"a", "draw", "bad escape in the draw name"},
       {"# draw 1 opaque \"" + std::string(56, 'n') + "\"\n" + cols, 1, "\"n", "draw", "name is 56 bytes long"},
+      {"# draw 1 transparent \"\xC3\x28\"\n" + cols, 1, "\"\xC3", "draw",
+       "name is not valid UTF-8: byte 0xC3 at index 0 does not begin a well-formed character"},
       {"# width 4\n# height 4\n" + cols + "# width 5\n", 4, "width", "width",
        "'# width' metadata must come before the column line"},
       {"# width 4\n", 1, "", "header", "no column line"},

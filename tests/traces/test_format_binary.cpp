@@ -335,6 +335,8 @@ TEST(FormatBinary, WriterRejectsBadHeadersAndCreatesNoFile) {
       {hd([](TraceHeader& h) { h.draws[1].cls = static_cast<DrawClass>(3); }), "byte offset 132, field draw[1].class"},
       {hd([](TraceHeader& h) { h.draws[0].name = std::string(56, 'x'); }), "byte offset 72, field draw[0].name: name is 56 bytes long"},
       {hd([](TraceHeader& h) { h.draws[3].name = "a\nb"; }), "byte offset 264, field draw[3].name: name contains control byte 0x0A"},
+      {hd([](TraceHeader& h) { h.draws[0].name = "caf\xC3"; }),
+       "byte offset 72, field draw[0].name: name is not valid UTF-8: byte 0xC3 at index 3"},
   };
   for (const Case& c : cases) {
     TempDir dir;

@@ -148,6 +148,31 @@ TEST_F(FormatValidation, DrawTableErrors) {
   EXPECT_TRUE(contains(errorAtOpen(b), {"byte offset 72, field draw[0].name: name contains control byte 0x09"}));
 }
 
+// Names are UTF-8 (FORMAT.md section 3): a reader that passed other bytes on
+// made JSON writers (info --json, run's report) fail with no file named.
+TEST_F(FormatValidation, DrawNameMustBeUtf8) {
+  std::string b = validBytes();
+  b[72] = '\xFF';  // "floor" -> "\xFFloor"
+  EXPECT_TRUE(contains(errorAtOpen(b), {path_ + ": byte offset 72, field draw[0].name: name is not valid UTF-8: "
+                                                "byte 0xFF at index 0 does not begin a well-formed character"}));
+  // Every kind of ill-formed sequence (as "glass" at 136, draw[1]).
+  for (const std::string bad : {"\xC3\x28", "\xC3", "\xC0\x80", "\xE0\x80\x80", "\xED\xA0\x80",
+                                "\xF4\x90\x80\x80", "\xF8\x88\x80\x80\x80", "\x80", "ok\xE2\x82"}) {
+    SCOPED_TRACE(testing::PrintToString(bad));
+    b = validBytes();
+    std::fill(b.begin() + 136, b.begin() + 192, '\0');
+    std::copy(bad.begin(), bad.end(), b.begin() + 136);
+    EXPECT_TRUE(contains(errorAtOpen(b), {"byte offset 136, field draw[1].name: name is not valid UTF-8"}));
+  }
+  // Well-formed multi-byte names read back unchanged.
+  const std::string good = "caf\xC3\xA9 \xE2\x9C\x93 \xF0\x9F\xA6\x8A \xF4\x8F\xBF\xBF";
+  b = validBytes();
+  std::fill(b.begin() + 136, b.begin() + 192, '\0');
+  std::copy(good.begin(), good.end(), b.begin() + 136);
+  writeFile(path_, b);
+  EXPECT_EQ(openTrace(path_)->header().draws[1].name, good);
+}
+
 TEST_F(FormatValidation, TruncatedRecordsDetectedAtOpen) {
   const std::string b = validBytes();
   const size_t end = kHeaderBytes + 3 * 32 + 10;
