@@ -129,6 +129,12 @@ class CsvReader final : public FragmentSource {
     throw TraceError::inCsv(path_, in_.number(), byte_offset, record, printable(field), printable(msg));
   }
   void parseMetadata(std::string_view line);
+  // The draw that would be entry kMaxDraws + 1 of the table.
+  std::string tooManyDraws(uint32_t id) const {
+    return fmt::format("draw {} would be draw number {} of the trace: at most {} distinct draws allowed "
+                       "(draw_count, FORMAT.md section 2.1)",
+                       id, header_.draws.size() + 1, fv::kMaxDraws);
+  }
   // Parses the current line as record `record`; in pass 1 unknown draws join the table.
   Fragment parseRow(uint64_t record, bool first_pass);
   // Next data line (skips blank and comment lines); false at end of file.
@@ -333,6 +339,8 @@ void CsvReader::parseMetadata(std::string_view line) {
     if (auto it = draws_.find(d.id); it != draws_.end())
       fail(id_offset, std::nullopt, key,
            fmt::format("duplicate draw id {} (also declared at line {})", d.id, it->second.where_line));
+    if (header_.draws.size() >= fv::kMaxDraws)
+      fail(id_offset, std::nullopt, key, tooManyDraws(d.id));
     draws_.emplace(d.id, DrawState{header_.draws.size(), true, in_.number()});
     header_.draws.push_back(std::move(d));
   }
@@ -407,6 +415,9 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
     if (!first_pass)
       throw TraceError::inCsv(path_, in_.number(), base, record, "draw",
                               "the file changed while it was being read (new draw id)");
+    // The table's limit is checked here, at the row that would break it (the
+    // binary writer would only find out after the whole first pass).
+    if (header_.draws.size() >= fv::kMaxDraws) err(kDraw, start[kDraw], tooManyDraws(f.draw));
     // Undeclared draw: named after its id, classed by its opaque column.
     draws_.emplace(f.draw, DrawState{header_.draws.size(), false, in_.number()});
     header_.draws.push_back(DrawInfo{f.draw, cls, fmt::format("draw{}", f.draw)});

@@ -313,6 +313,33 @@ TEST_F(Csv, HeaderAndMetadataErrors) {
   }
 }
 
+// The draw table holds at most 1048576 draws (draw_count): the CSV reader
+// refuses the row or '# draw' line that would add one more, where it is (it
+// accepted such a CSV, and converting it failed blaming the output file).
+TEST_F(Csv, AtMost1048576DistinctDraws) {
+  constexpr uint32_t kMax = 1u << 20;
+  std::string text = "# width 1\n# height 1\ndraw,prim,x,y,z,r,g,b,a,opaque\n";
+  for (uint32_t i = 0; i < kMax; ++i) fmt::format_to(std::back_inserter(text), "{},0,0,0,0,0,0,0,0,0\n", i);
+  text += "7,1,0,0,0,0,0,0,0,0\n";  // record 1048576: a known draw again
+  writeFile(csv_, text);
+  EXPECT_EQ(openTrace(csv_)->header().draws.size(), kMax);  // the limit itself is fine
+  const size_t offset = text.size();
+  text += "4000000000,0,0,0,0,0,0,0,0,0\n";  // record 1048577, line 3 + 1048578
+  EXPECT_EQ(csvError(text), fmt::format("{}: line 1048581, byte offset {}, record 1048577, column draw: draw 4000000000 "
+                                        "would be draw number 1048577 of the trace: at most 1048576 distinct draws "
+                                        "allowed (draw_count, FORMAT.md section 2.1)",
+                                        csv_, offset));
+  // The same for declared draws, at the '# draw' line's id.
+  std::string declared;
+  for (uint32_t i = 0; i <= kMax; ++i) fmt::format_to(std::back_inserter(declared), "# draw {} opaque \"\"\n", i);
+  const size_t last_line = declared.rfind("# draw");
+  declared += "draw,prim,x,y,z,r,g,b,a,opaque\n";
+  EXPECT_TRUE(contains(csvError(declared, {.width = 1, .height = 1}),
+                       {fmt::format("{}: line 1048577, byte offset {}, field draw: draw 1048576 would be draw number "
+                                    "1048577 of the trace: at most 1048576",
+                                    csv_, last_line + 7)}));
+}
+
 TEST_F(Csv, ErrorAccessorsCarryLineAndColumn) {
   writeFile(csv_, kHead + "1,0,1,1,0.5,0,0,0,9,0\n");
   try {
