@@ -181,8 +181,11 @@ void validateSetting(const std::string& key, const ojson& v, const std::string& 
   }
 }
 
-// Applies one setting (key = value) to s; `where` names the spec file and key for errors.
-void applySetting(Settings& s, const std::string& key, const ojson& v, const std::string& where) {
+// Applies one setting (key = value) to s; `where` names the spec file and key for
+// errors. A relative `config` path is taken from the spec's folder `dir` (as
+// trace paths are) and kept absolute, so the plan's commands run from anywhere.
+void applySetting(Settings& s, const std::string& key, const ojson& v, const std::string& where,
+                  const fs::path& dir) {
   if (key == "set") {
     if (!v.is_object()) throw std::invalid_argument(where + ": expected an object of ROP parameters");
     for (auto it = v.begin(); it != v.end(); ++it) {
@@ -192,6 +195,12 @@ void applySetting(Settings& s, const std::string& key, const ojson& v, const std
   } else if (key.find('.') != std::string::npos) {
     validateSetting(key, v, where);
     s.sets.emplace_back(key, scalarText(v, where));
+  } else if (key == "config" && v.is_string() && !v.get<std::string>().empty()) {
+    fs::path file(v.get<std::string>());
+    if (file.is_relative()) file = (dir / file).lexically_normal();
+    const ojson resolved = file.string();
+    validateSetting(key, resolved, where);
+    s.options[key] = file.string();
   } else if (kRunOptions.count(key)) {
     validateSetting(key, v, where);
     s.options[key] = scalarText(v, where);
@@ -318,11 +327,12 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
     if (it.key() != "traces" && it.key() != "base" && it.key() != "axes")
       throw std::invalid_argument("sweep spec " + specPath + ": unknown key '" + it.key() +
                                   "' (expected traces, base, axes)");
+  const fs::path dir = fs::absolute(specPath).parent_path();
   Settings base;
   if (spec.contains("base")) {
     if (!spec["base"].is_object()) throw std::invalid_argument("sweep spec " + specPath + ": 'base' must be an object");
     for (auto it = spec["base"].begin(); it != spec["base"].end(); ++it)
-      applySetting(base, it.key(), it.value(), "sweep spec " + specPath + ": base." + it.key());
+      applySetting(base, it.key(), it.value(), "sweep spec " + specPath + ": base." + it.key(), dir);
   }
   struct Value {
     std::string label;
@@ -343,10 +353,11 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
         if (v.is_object()) {
           val.label = v.contains("label") ? scalarText(v["label"], where + ".label") : fmt::format("{}{}", it.key(), i);
           for (auto kv = v.begin(); kv != v.end(); ++kv)
-            if (kv.key() != "label") applySetting(probe, kv.key(), kv.value(), fmt::format("{}[{}].{}", where, i, kv.key()));
+            if (kv.key() != "label")
+              applySetting(probe, kv.key(), kv.value(), fmt::format("{}[{}].{}", where, i, kv.key()), dir);
         } else {
           val.label = scalarText(v, where);
-          applySetting(probe, it.key(), v, fmt::format("{}[{}]", where, i));
+          applySetting(probe, it.key(), v, fmt::format("{}[{}]", where, i), dir);
         }
         vals.push_back(val);
       }
@@ -374,21 +385,23 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
         const Value& v = vals[idx[a]];
         if (v.setting.is_object()) {
           for (auto kv = v.setting.begin(); kv != v.setting.end(); ++kv)
-            if (kv.key() != "label") applySetting(s, kv.key(), kv.value(), "axes." + name);
+            if (kv.key() != "label") applySetting(s, kv.key(), kv.value(), "axes." + name, dir);
         } else {
-          applySetting(s, name, v.setting, "axes." + name);
+          applySetting(s, name, v.setting, "axes." + name, dir);
         }
         p.axes[name] = v.label;
         label += "-" + v.label;
       }
       p.id = fmt::format("{:04d}-{}", points.size(), sanitize(label));
-      // ROP parameters are checked now (name, type, range), so a typo stops the
-      // sweep before anything runs instead of failing every point.
-      if (s.options.count("mode") == 0 || s.options.at("mode") == "timing") {
+      // The point's ROP configuration is resolved now, as `oitsim run` resolves
+      // it in both modes (a preset unset: the config file's, else igpu), so a
+      // combination that breaks a constraint stops the sweep before anything
+      // runs instead of failing every point.
+      {
         std::vector<std::string> sets;
         for (const auto& [k, v] : s.sets) sets.push_back(k + "=" + v);
         try {
-          rop::resolveTree(s.options.count("preset") ? s.options.at("preset") : "igpu",
+          rop::resolveTree(s.options.count("preset") ? s.options.at("preset") : "",
                            s.options.count("config") ? s.options.at("config") : "", sets);
         } catch (const std::exception& e) {
           throw std::invalid_argument("sweep spec " + specPath + ": point " + p.id + ": " + e.what());

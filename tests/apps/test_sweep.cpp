@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -315,6 +316,54 @@ TEST(SweepErrors, EveryAxisValueIsCheckedBeforeAnythingRuns) {
                           std::string(has_base ? "" : R"("base": {"mode": "functional"}, )") + spec + "}",
                       "oitsim: error: sweep spec " + d.file(message));
   }
+}
+
+// `oitsim run` resolves the ROP configuration in both modes, so the sweep's
+// up-front check does too: a bad combination in a functional sweep is refused
+// (exit 1, nothing created) instead of failing every point (exit 2).
+TEST(SweepErrors, FunctionalSweepChecksTheRopConfigurationToo) {
+  TempDir d("sweep_func_rop");
+  for (const char* mode : {"functional", "timing"})
+    expectSpecRefused(d, R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+      "base": {"mode": ")" + std::string(mode) + R"(", "input.latency_min": 500}, "axes": {"algo": ["mlab"]}})",
+                      "oitsim: error: sweep spec " + d.file("s.json") + ": point 0000-glass-mlab: ");
+}
+
+// A spec's config file is found beside the spec (as its traces are), whatever
+// the current directory, and the plan names it by absolute path, so a line of
+// commands.txt reproduces its point from anywhere.
+TEST(SweepSpec, ConfigFileIsTakenFromTheSpecFolderAndWrittenAbsolute) {
+  TempDir d("sweep_cfg");
+  fs::create_directories(d.path() / "specs");
+  writeText(d.file("specs/cc.json"), R"({"lock": {"capacity": 32}})");
+  writeText(d.file("specs/s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "functional", "config": "cc.json"}, "axes": {"algo": ["mlab"]}})");
+  const std::string cfg = d.file("specs/cc.json");
+  // From the folder above the spec's: "cc.json" is not in the current directory.
+  CliResult r = runShell("cd " + d.path().string() + " && " + oitsimPath() + " sweep specs/s.json --out o --emit slurm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json plan = readJson(d.file("o/plan.json"));
+  const auto args = plan["points"][0]["args"].get<std::vector<std::string>>();
+  const auto at = std::find(args.begin(), args.end(), "--config");
+  ASSERT_NE(at, args.end()) << plan.dump(1);
+  EXPECT_EQ(*(at + 1), cfg);
+  const std::string commands = readText(d.file("o/commands.txt"));
+  EXPECT_NE(commands.find(" --config " + cfg + " "), std::string::npos) << commands;
+  // The point's line, run from elsewhere, finds the file and uses it.
+  ASSERT_EQ(std::system(("cd / && bash -c \"$(sed -n 1p " + d.file("o/commands.txt") + ")\"").c_str()), 0)
+      << readText(d.file("o/points/0000-glass-mlab/stderr.txt"));
+  const nlohmann::json rep = readJson(d.file("o/points/0000-glass-mlab/report.json"));
+  EXPECT_NE(rep["oitsim"]["command"].get<std::string>().find("--config " + cfg), std::string::npos);
+
+  // A config file that is not beside the spec is refused before anything runs.
+  writeText(d.file("specs/s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "functional", "config": "nowhere.json"}})");
+  r = runShell("cd " + d.path().string() + " && " + oitsimPath() + " sweep -q specs/s.json --out o2");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("base.config: " + d.file("specs/nowhere.json") + ": cannot open config file"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o2")));
 }
 
 TEST(SweepErrors, UnknownSceneIsASpecErrorAndCreatesNothing) {
