@@ -1,5 +1,9 @@
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <tuple>
 #include <string>
@@ -44,6 +48,23 @@ std::unique_ptr<FragmentSource> openTraceWithSize(const std::string& path, uint3
           "'# width' / '# height' lines)",
           name, given, path, h.width, h.height));
   return src;
+}
+
+void checkOutputFolder(const std::string& option, const std::string& folder) {
+  namespace fs = std::filesystem;
+  if (folder.empty()) throw std::invalid_argument(option + ": expected a folder, got an empty path");
+  std::error_code ec;
+  const fs::file_status st = fs::status(folder, ec);
+  if (fs::exists(st) && !fs::is_directory(st))
+    throw std::invalid_argument(fmt::format("{} {}: exists and is not a directory", option, folder));
+  // The folder, or the nearest part of its path that exists (where it will be created).
+  fs::path probe = fs::absolute(fs::path(folder), ec);
+  while (!probe.empty() && !fs::exists(probe, ec) && probe != probe.parent_path()) probe = probe.parent_path();
+  if (!fs::is_directory(probe, ec))
+    throw std::invalid_argument(fmt::format("{} {}: {} is not a directory", option, folder, probe.string()));
+  if (::access(probe.c_str(), W_OK | X_OK) != 0)
+    throw std::invalid_argument(
+        fmt::format("{} {}: cannot write in {}: {}", option, folder, probe.string(), std::strerror(errno)));
 }
 
 }  // namespace oit::cli

@@ -27,6 +27,12 @@ void addReportCommand(CLI::App& app);  // oitsim report DIR -> DIR/report.html
 void setCommandLine(int argc, char* argv[]);
 const std::string& commandLine();
 
+// Checks that `folder` (given as `option`, e.g. --out) can be used as an output
+// folder before anything runs: not empty, not an existing non-directory, and
+// the folder or the nearest existing part of its path a writable directory.
+// Errors name the option: "--out afile: exists and is not a directory".
+void checkOutputFolder(const std::string& option, const std::string& folder);
+
 // openTrace with the --width/--height options (0 = not given); a value that
 // differs from the size the trace itself gives is an error naming the option.
 std::unique_ptr<FragmentSource> openTraceWithSize(const std::string& path, uint32_t width, uint32_t height);

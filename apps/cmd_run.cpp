@@ -128,19 +128,7 @@ void checkOptions(const RunArgs& a) {
     throw std::invalid_argument("--width 0: expected a frame width of at least 1 pixel");
   if (a.height_given && a.height == 0)
     throw std::invalid_argument("--height 0: expected a frame height of at least 1 pixel");
-  std::error_code ec;
-  const fs::file_status st = fs::status(a.out, ec);
-  if (fs::exists(st) && !fs::is_directory(st))
-    throw std::invalid_argument(fmt::format("--out {}: exists and is not a directory", a.out));
-  // Writable, checked now rather than after the simulation: the folder, or the
-  // nearest part of its path that exists (where it will be created).
-  if (a.out.empty()) throw std::invalid_argument("--out: expected a folder, got an empty path");
-  fs::path probe = fs::absolute(fs::path(a.out), ec);
-  while (!probe.empty() && !fs::exists(probe, ec) && probe != probe.parent_path()) probe = probe.parent_path();
-  if (!fs::is_directory(probe, ec))
-    throw std::invalid_argument(fmt::format("--out {}: {} is not a directory", a.out, probe.string()));
-  if (::access(probe.c_str(), W_OK | X_OK) != 0)
-    throw std::invalid_argument(fmt::format("--out {}: cannot write in {}: {}", a.out, probe.string(), std::strerror(errno)));
+  checkOutputFolder("--out", a.out);
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));

@@ -493,13 +493,14 @@ std::string headOf(const fs::path& file, size_t max_lines) {
   return out;
 }
 
-// Flattens a report to dotted keys. The time series (one sample per stats
-// interval) is a trace, not a metric, and stays in the point's report.json.
+// Flattens a report to dotted keys. The time series' samples (one per stats
+// interval) are a trace, not a metric, and stay in the point's report.json; its
+// period, timeseries.interval_cycles, is a column like every other field.
 void flatten(const nlohmann::json& j, const std::string& prefix, nlohmann::json& out) {
   if (j.is_object()) {
     for (auto it = j.begin(); it != j.end(); ++it) {
       const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
-      if (key == "timeseries") continue;
+      if (key == "timeseries.samples") continue;
       flatten(it.value(), key, out);
     }
   } else if (j.is_array()) {
@@ -540,6 +541,7 @@ void runAll(const std::vector<std::function<void(size_t)>>& tasks, unsigned jobs
 
 void runSweep(const SweepArgs& a) {
   const ojson spec = loadSpec(a.spec);
+  checkOutputFolder("--out", a.out);  // as `oitsim run --out`: before anything is created
   const fs::path out = fs::absolute(a.out);
   const auto traces = parseTraces(spec, a.spec, out);
   const auto points = expand(spec, a.spec, traces, out);
@@ -558,7 +560,9 @@ void runSweep(const SweepArgs& a) {
   // was: the files this step made are removed (the generators' errors are in
   // the message, so nothing is lost).
   const bool out_existed = fs::exists(out), traces_existed = fs::exists(out / "traces");
-  fs::create_directories(out / "traces");
+  std::error_code mk;
+  fs::create_directories(out / "traces", mk);
+  if (mk) throw std::runtime_error(fmt::format("--out {}: cannot create the folder: {}", a.out, mk.message()));
   std::vector<const TraceEntry*> gens;
   for (const auto& t : traces)
     if (!t.gen_args.empty()) gens.push_back(&t);
@@ -631,9 +635,11 @@ void runSweep(const SweepArgs& a) {
     commands += "mkdir -p " + dir + " && " + line + " >" + dir + "/stdout.txt 2>" + dir + "/stderr.txt\n";
   }
   // Nothing of an earlier sweep into this folder may pass for this one's, also
-  // if this one is interrupted: its tables and page go, and every point folder
-  // of this plan is emptied now (not just before the point runs).
-  for (const char* name : {"results.csv", "results.json", "report.html", "speed.json"}) fs::remove(out / name);
+  // if this one is interrupted: its tables, page and Slurm script go (a stale
+  // sweep.slurm would submit the earlier plan's task count), and every point
+  // folder of this plan is emptied now (not just before the point runs).
+  for (const char* name : {"results.csv", "results.json", "report.html", "speed.json", "sweep.slurm"})
+    fs::remove(out / name);
   for (const auto& p : points) fs::remove_all(out / "points" / p.id);
   reports::writeJsonReport((out / "plan.json").string(), nlohmann::json::parse(plan.dump()));
   writeText(out / "commands.txt", commands);

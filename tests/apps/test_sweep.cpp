@@ -329,6 +329,21 @@ TEST(SweepErrors, FunctionalSweepChecksTheRopConfigurationToo) {
                       "oitsim: error: sweep spec " + d.file("s.json") + ": point 0000-glass-mlab: ");
 }
 
+// --out that cannot be a folder: one line naming the option, as `oitsim run --out`.
+TEST(SweepErrors, OutThatCannotBeAFolderIsRefusedNamingTheOption) {
+  TempDir d("sweep_out");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "functional"}})");
+  writeText(d.file("afile"), "mine\n");
+  CliResult r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("afile"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --out " + d.file("afile") + ": exists and is not a directory\n");
+  EXPECT_EQ(readText(d.file("afile")), "mine\n");
+  r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("afile") + "/sub");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --out " + d.file("afile") + "/sub: " + d.file("afile") + " is not a directory\n");
+}
+
 // A spec's config file is found beside the spec (as its traces are), whatever
 // the current directory, and the plan names it by absolute path, so a line of
 // commands.txt reproduces its point from anywhere.
@@ -364,6 +379,29 @@ TEST(SweepSpec, ConfigFileIsTakenFromTheSpecFolderAndWrittenAbsolute) {
             std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(d.file("o2")));
+}
+
+// A timing sweep's table has the time series' period (every report field is a
+// column except the samples), and a sweep into a folder that had an earlier
+// --emit slurm removes its sweep.slurm (it would submit the earlier plan).
+TEST(SweepSpec, TimingTableHasTheSeriesPeriodAndAStaleSlurmScriptGoes) {
+  TempDir d("sweep_timing");
+  writeText(d.file("s.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "timing", "stats.interval_cycles": 2000}, "axes": {"algo": ["mlab"]}})");
+  CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + d.file("o") + " --emit slurm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(d.file("o/sweep.slurm")));
+  r = runOitsim("sweep -q " + d.file("s.json") + " --out " + d.file("o"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(d.file("o/sweep.slurm"))) << "a stale sweep.slurm survived the new sweep";
+  const auto csv = lines(readText(d.file("o/results.csv")));
+  ASSERT_EQ(csv.size(), 2u);
+  const auto header = csvSplit(csv[0]), row = csvSplit(csv[1]);
+  const auto col = std::find(header.begin(), header.end(), "timeseries.interval_cycles");
+  ASSERT_NE(col, header.end()) << csv[0];
+  const nlohmann::json rep = readJson(d.file("o/points/0000-glass-mlab/report.json"));
+  EXPECT_EQ(row[size_t(col - header.begin())], rep["timeseries"]["interval_cycles"].dump());
+  for (const auto& h : header) EXPECT_EQ(h.find("timeseries.samples"), std::string::npos) << h;
 }
 
 TEST(SweepErrors, UnknownSceneIsASpecErrorAndCreatesNothing) {
