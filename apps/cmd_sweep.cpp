@@ -218,37 +218,141 @@ std::string sanitize(const std::string& s) {
   return r;
 }
 
-// YAML specs go through Debian's python3-yaml (no C++ YAML library needed).
+std::string shellQuote(const std::string& a);
+
+// Reads a YAML spec with Debian's python3-yaml (no C++ YAML library needed)
+// and returns it as JSON text. Errors are one line naming the file: python3-yaml
+// missing, or the YAML error with its line and column (a key given twice in one
+// mapping is an error too, as in JSON specs and config files).
+std::string yamlToJson(const std::string& path) {
+  // Exit codes: 0 JSON on stdout; 3 no yaml module; 4 one-line message on stdout.
+  static const char* kScript = R"py(
+import sys, json
+try:
+    import yaml
+except ImportError:
+    sys.exit(3)
+def fail(msg):
+    sys.stdout.write(" ".join(str(msg).split()))
+    sys.exit(4)
+def where(mark):
+    return "line %d, column %d: " % (mark.line + 1, mark.column + 1) if mark is not None else ""
+class Loader(yaml.SafeLoader):
+    pass
+def mapping(loader, node, deep=False):
+    seen = set()
+    for k, _ in node.value:
+        key = loader.construct_object(k, deep=True)
+        try:
+            if key in seen:
+                raise yaml.constructor.ConstructorError(None, None, "key %r appears twice in the same mapping (the second would silently replace the first); give each key once" % (key,), k.start_mark)
+            seen.add(key)
+        except TypeError:
+            pass
+    return yaml.SafeLoader.construct_mapping(loader, node, deep)
+Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+try:
+    with open(sys.argv[1]) as f:
+        data = yaml.load(f, Loader=Loader)
+except yaml.YAMLError as e:
+    mark = getattr(e, "problem_mark", None)
+    problem = getattr(e, "problem", None)
+    context = getattr(e, "context", None)
+    if problem is None:
+        fail("not valid YAML: " + str(e))
+    fail("not valid YAML: " + where(mark) + problem + (" (" + context + ")" if context else ""))
+except (OSError, UnicodeDecodeError) as e:
+    fail("cannot read: " + str(e))
+try:
+    sys.stdout.write(json.dumps(data, allow_nan=False, default=str))
+except (ValueError, TypeError) as e:
+    fail("not representable as JSON: " + str(e))
+)py";
+  // Debian's python3 has python3-yaml; a pyenv shim on PATH may not.
+  const std::string py = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmd = py + " -c " + shellQuote(kScript) + " " + shellQuote(path) + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) throw std::runtime_error("sweep spec " + path + ": cannot start python3 to read YAML");
+  std::string text;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) text.append(buf, n);
+  const int status = pclose(p);
+  const int code = status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (code == 0) return text;
+  if (code == 3)
+    throw std::invalid_argument("sweep spec " + path + ": reading YAML needs python3-yaml (" + py +
+                                " has no module yaml; scripts/setup.sh installs it), or write the spec as JSON");
+  if (code == 4) throw std::invalid_argument("sweep spec " + path + ": " + text);
+  // python3 itself missing or failing: its last line says why.
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  const size_t nl = text.rfind('\n');
+  throw std::runtime_error("sweep spec " + path + ": cannot read YAML with " + py + " (exit code " +
+                           std::to_string(code) + "): " + (nl == std::string::npos ? text : text.substr(nl + 1)));
+}
+
+// Loads a spec (JSON, or YAML by extension). Every error names the file: JSON
+// syntax with nlohmann's line and column, a key repeated within one object (the
+// parsers would keep the last silently; config files refuse it too), and a top
+// level that is not an object.
 ojson loadSpec(const std::string& path) {
   if (!fs::exists(path)) throw std::invalid_argument("sweep spec " + path + ": no such file");
   const std::string ext = fs::path(path).extension().string();
+  const bool yaml = ext == ".yaml" || ext == ".yml";
   std::string text;
-  if (ext == ".yaml" || ext == ".yml") {
-    // Debian's python3 has python3-yaml; a pyenv shim on PATH may not.
-    const std::string py = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    const std::string cmd =
-        py + " -c 'import sys, json, yaml; json.dump(yaml.safe_load(open(sys.argv[1])), sys.stdout)' '" + path +
-        "' 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) throw std::runtime_error("sweep spec " + path + ": cannot start python3 to read YAML");
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) text.append(buf, n);
-    if (pclose(p) != 0)
-      throw std::invalid_argument("sweep spec " + path +
-                                  ": YAML needs python3 with python3-yaml (scripts/setup.sh), or the file is not "
-                                  "valid YAML: " + text);
+  if (yaml) {
+    text = yamlToJson(path);
   } else {
     std::ifstream in(path);
+    if (!in) throw std::invalid_argument("sweep spec " + path + ": cannot open");
     std::stringstream ss;
     ss << in.rdbuf();
     text = ss.str();
   }
+  // Repeated keys, named by their path (base.mode, traces[1].gen).
+  struct Level {
+    bool object = false;
+    std::set<std::string> keys;  // objects: keys seen
+    std::string key;             // objects: the current key
+    size_t index = 0;            // arrays: elements started
+  };
+  std::vector<Level> stack;
+  auto where = [&](const std::string& key) {
+    std::string at;
+    for (size_t i = 0; i + 1 < stack.size(); ++i)
+      at += stack[i].object ? (at.empty() ? "" : ".") + stack[i].key : fmt::format("[{}]", stack[i].index - 1);
+    return at.empty() ? key : at + "." + key;
+  };
+  const ojson::parser_callback_t cb = [&](int, ojson::parse_event_t ev, ojson& parsed) {
+    using E = ojson::parse_event_t;
+    if ((ev == E::object_start || ev == E::array_start || ev == E::value) && !stack.empty() && !stack.back().object)
+      ++stack.back().index;
+    if (ev == E::object_start || ev == E::array_start) {
+      stack.push_back(Level{ev == E::object_start, {}, {}, 0});
+    } else if (ev == E::object_end || ev == E::array_end) {
+      if (!stack.empty()) stack.pop_back();
+    } else if (ev == E::key && !stack.empty() && parsed.is_string()) {
+      const std::string key = parsed.get<std::string>();
+      if (!stack.back().keys.insert(key).second)
+        throw std::invalid_argument("sweep spec " + path + ": key '" + where(key) +
+                                    "' appears twice in the same object (the second would silently replace the "
+                                    "first); give each key once");
+      stack.back().key = key;
+    }
+    return true;
+  };
+  ojson spec;
   try {
-    return ojson::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+    spec = ojson::parse(text, cb);
+  } catch (const nlohmann::json::exception& e) {
     throw std::invalid_argument("sweep spec " + path + ": not valid JSON: " + e.what());
   }
+  if (!spec.is_object())
+    throw std::invalid_argument("sweep spec " + path + ": expected " +
+                                (yaml ? std::string("a YAML mapping") : std::string("a JSON object")) +
+                                " with keys traces, base, axes at the top level, got " +
+                                (spec.is_array() ? "a list" : spec.is_null() ? "nothing" : "a " + std::string(spec.type_name())));
+  return spec;
 }
 
 struct TraceEntry {

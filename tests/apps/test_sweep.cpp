@@ -329,6 +329,22 @@ TEST(SweepErrors, FunctionalSweepChecksTheRopConfigurationToo) {
                       "oitsim: error: sweep spec " + d.file("s.json") + ": point 0000-glass-mlab: ");
 }
 
+// The spec's top level and its keys: a list is not a spec, and a key given
+// twice in one object is refused (as in config files) rather than the last
+// silently winning.
+TEST(SweepErrors, SpecMustBeAnObjectWithEachKeyOnce) {
+  TempDir d("sweep_shape");
+  expectSpecRefused(d, R"([{"traces": [{"gen": "glass"}]}])",
+                    "sweep spec " + d.file("s.json") +
+                        ": expected a JSON object with keys traces, base, axes at the top level, got a list");
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass"}], "axes": {"algo": ["mlab"]}, "axes": {"algo": ["alpha"]}})",
+                    "sweep spec " + d.file("s.json") + ": key 'axes' appears twice in the same object");
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass"}], "base": {"mode": "functional", "mode": "timing"}})",
+                    "sweep spec " + d.file("s.json") + ": key 'base.mode' appears twice in the same object");
+  expectSpecRefused(d, R"({"traces": ["a.oitt", {"gen": "glass", "gen": "hair"}]})",
+                    "sweep spec " + d.file("s.json") + ": key 'traces[1].gen' appears twice in the same object");
+}
+
 // --out that cannot be a folder: one line naming the option, as `oitsim run --out`.
 TEST(SweepErrors, OutThatCannotBeAFolderIsRefusedNamingTheOption) {
   TempDir d("sweep_out");
@@ -466,6 +482,29 @@ TEST(InfoHeatmap, CountsEveryTransparentFragmentOnce) {
   EXPECT_EQ(uint64_t(mx), t["max"].get<uint64_t>());
   EXPECT_EQ(covered, t["covered_pixels"].get<uint64_t>());
   EXPECT_GT(sum, 0.0);
+}
+
+// A YAML spec that does not parse: one line naming the file and where the
+// error is, no Python traceback; a key repeated in one mapping is refused.
+TEST(SweepYaml, InvalidYamlIsOneLineNamingFileLineAndColumn) {
+  if (!fs::exists("/usr/bin/python3") || std::system("/usr/bin/python3 -c 'import yaml' 2>/dev/null") != 0)
+    GTEST_SKIP() << "python3-yaml absent: YAML specs unavailable";
+  TempDir d("sweep_yaml_bad");
+  const std::map<std::string, std::string> cases = {
+      {"traces:\n  - {gen: glass\naxes: {algo: [mlab]}\n", ": not valid YAML: line 3, column 5: "},
+      {"traces: [{gen: glass}]\nbase:\n  mode: functional\n  mode: timing\n",
+       ": not valid YAML: line 4, column 3: key 'mode' appears twice in the same mapping"},
+      {"- {gen: glass}\n", ": expected a YAML mapping with keys traces, base, axes at the top level, got a list"},
+  };
+  for (const auto& [yaml, message] : cases) {
+    writeText(d.file("s.yaml"), yaml);
+    CliResult r = runOitsim("sweep -q " + d.file("s.yaml") + " --out " + d.file("o"));
+    EXPECT_EQ(r.exit_code, 1) << yaml << r.output;
+    EXPECT_EQ(lines(r.output).size(), 1u) << yaml << r.output;
+    EXPECT_EQ(r.output.rfind("oitsim: error: sweep spec " + d.file("s.yaml") + message, 0), 0u) << yaml << r.output;
+    EXPECT_EQ(r.output.find("Traceback"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(d.file("o")));
+  }
 }
 
 TEST(SweepYaml, YamlSpecWithBundlesAndRopParameters) {
