@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -21,8 +22,16 @@ struct ConfigArgs {
   bool markdown = false;
 };
 
-void runConfig(const ConfigArgs& a) {
+void runConfig(const ConfigArgs& a, const CLI::App& cmd) {
   if (a.markdown) {
+    // The table is every preset's defaults: an option that changes one
+    // configuration has nothing to apply to, and would pass unchecked.
+    std::string given;
+    for (const char* opt : {"--preset", "--config", "--set", "--json"})
+      if (cmd.count(opt)) given += (given.empty() ? "" : ", ") + std::string(opt);
+    if (!given.empty())
+      throw std::invalid_argument("--markdown prints every preset's defaults and takes no --preset, --config, --set "
+                                  "or --json (given: " + given + ")");
     fmt::print("{}", rop::presetTableMarkdown());
     return;
   }
@@ -44,8 +53,10 @@ void addConfigCommand(CLI::App& app) {
   cmd->add_option("--config,-c", a->config_file, "JSON file of property values, nested or dotted keys");
   cmd->add_option("--set,-s", a->sets, "Override one property: path=value (repeatable)")->take_all();
   cmd->add_flag("--json", a->json, "Print the effective tree as JSON (usable as --config)");
-  cmd->add_flag("--markdown", a->markdown, "Print all presets side by side as a Markdown table");
-  cmd->callback([a] { runConfig(*a); });
+  cmd->add_flag("--markdown", a->markdown,
+                "Print all presets' defaults side by side as a Markdown table (alone: no --preset, --config, --set, "
+                "--json)");
+  cmd->callback([a, cmd] { runConfig(*a, *cmd); });
 }
 
 }  // namespace oit::cli

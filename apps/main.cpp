@@ -49,6 +49,20 @@ extern "C" int sc_main(int argc, char* argv[]) {
   for (CLI::App* sub : app.get_subcommands({}))
     for (CLI::Option* o : sub->get_options())
       if (o->get_type_name() == "UINT") o->check(unsigned_text);
+  // CLI11 takes an unknown first word for a stray argument and says only "A
+  // subcommand is required": name it and the subcommands instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->check_name(argv[1]);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      fmt::print(stderr, "oitsim: error: unknown subcommand '{}' (expected one of {}; see --help)\n", argv[1], names);
+      return 1;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,49 @@
+// The top-level command line and `oitsim config`: one-line errors naming what
+// was wrong, exit code 1.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "CliRunner.hpp"
+
+namespace oit::test {
+namespace {
+
+TEST(CliCommands, UnknownSubcommandIsNamed) {
+  CliResult r = runOitsim("bogus");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(lines(r.output).size(), 1u) << r.output;
+  EXPECT_EQ(r.output.rfind("oitsim: error: unknown subcommand 'bogus' (expected one of gen, scenes, ", 0), 0u)
+      << r.output;
+  // No subcommand at all is still CLI11's message.
+  r = runOitsim("");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("A subcommand is required"), std::string::npos) << r.output;
+  // A known one still runs.
+  r = runOitsim("scenes");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+// --markdown prints every preset's defaults; options that pick one
+// configuration are refused instead of passing unchecked.
+TEST(CliCommands, ConfigMarkdownTakesNoConfigurationOptions) {
+  CliResult r = runOitsim("config --markdown");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("| igpu |"), std::string::npos) << r.output.substr(0, 500);
+  for (const std::string& extra : {std::string("--set nosuch=1"), std::string("--preset xyz"),
+                                   std::string("--config /nonexistent.json"), std::string("--json")}) {
+    r = runOitsim("config --markdown " + extra);
+    EXPECT_EQ(r.exit_code, 1) << extra << "\n" << r.output;
+    EXPECT_EQ(lines(r.output).size(), 1u) << extra << "\n" << r.output;
+    EXPECT_EQ(r.output.rfind("oitsim: error: --markdown prints every preset's defaults and takes no --preset, "
+                             "--config, --set or --json (given: " + extra.substr(0, extra.find(' ')) + ")", 0),
+              0u)
+        << r.output;
+  }
+  r = runOitsim("config --markdown --set nosuch=1 --preset xyz --config /nonexistent.json");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("(given: --preset, --config, --set)"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace oit::test
