@@ -63,12 +63,15 @@ void runCapture(CaptureArgs& a, bool has_az, bool has_el, bool has_fov) {
   o.alphas = a.alphas;
   o.shading = a.shading == "constant" ? gen::Shading::Constant : gen::Shading::Lambert;
 
-  // Never overwrite a mesh being read (a named mesh is its installed file).
-  for (uint32_t f = 0; f < a.frames; ++f)
+  // -o is checked before GL starts; never overwrite a mesh being read (a named
+  // mesh is its installed file).
+  for (uint32_t f = 0; f < a.frames; ++f) {
+    checkOutputFile("-o", capture::frameFileName(a.output, f, a.frames));
     for (const std::string& m : o.meshes) {
       const gen::NamedMesh* named = gen::findNamedMesh(m);
       checkNotInput("-o", capture::frameFileName(a.output, f, a.frames), "mesh --mesh", named ? named->path : m);
     }
+  }
   capture::Capturer cap(o);  // validates, loads meshes, creates the GL context
   if (!a.quiet) fmt::print(stderr, "capture: {} ({})\n", cap.renderer(), cap.glVersion());
   bool all_ok = true;

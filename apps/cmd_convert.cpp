@@ -16,6 +16,7 @@ struct ConvertArgs {
 };
 
 void runConvert(const ConvertArgs& a) {
+  checkOutputFile("output", a.out);
   // The same file also through a symlink or another spelling of the path.
   checkNotInput("output", a.out, "trace", a.in);
   auto src = openTraceWithSize(a.in, a.width, a.height);

@@ -65,6 +65,8 @@ void runGen(GenArgs& a, bool has_az, bool has_el, bool has_fov, bool has_alpha) 
   o.shading = a.shading == "constant" ? gen::Shading::Constant : gen::Shading::Lambert;
   o.encoding = a.encoding == "unorm8" ? ColourEncoding::Unorm8 : ColourEncoding::Fp32;
 
+  // -o is checked before the scene is built (a bad path failed only at the end).
+  checkOutputFile("-o", a.output);
   // Never overwrite the mesh being read (a named mesh is its installed file).
   const gen::NamedMesh* named = gen::findNamedMesh(o.mesh);
   checkNotInput("-o", a.output, "mesh --mesh", named ? named->path : o.mesh);

@@ -19,6 +19,7 @@ struct InfoArgs {
   uint32_t width = 0, height = 0;
   bool json = false;
   std::string heatmap;  // --heatmap FILE.pfm
+  bool heatmap_given = false;
 };
 
 nlohmann::json complexityJson(const ComplexityStats& c) {
@@ -78,9 +79,12 @@ void writeHeatmap(FragmentSource& src, const std::string& path) {
 }
 
 void runInfo(const InfoArgs& a) {
-  if (!a.heatmap.empty()) checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
+  if (a.heatmap_given) {  // before the trace is read
+    checkOutputFile("--heatmap", a.heatmap);
+    checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
+  }
   auto src = openTraceWithSize(a.trace, a.width, a.height);
-  if (!a.heatmap.empty()) {
+  if (a.heatmap_given) {
     writeHeatmap(*src, a.heatmap);
     src->rewind();
   }
@@ -148,9 +152,12 @@ void addInfoCommand(CLI::App& app) {
   cmd->add_option("--width", args->width, "Frame width of a CSV trace without a width comment");
   cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment");
   cmd->add_flag("--json", args->json, "Print the statistics as JSON");
-  cmd->add_option("--heatmap", args->heatmap,
-                  "Also write transparent fragments per pixel (depth complexity) as a PFM file");
-  cmd->callback([args] { runInfo(*args); });
+  CLI::Option* heatmap = cmd->add_option("--heatmap", args->heatmap,
+                                         "Also write transparent fragments per pixel (depth complexity) as a PFM file");
+  cmd->callback([args, heatmap] {
+    args->heatmap_given = heatmap->count() > 0;
+    runInfo(*args);
+  });
 }
 
 }  // namespace oit::cli

@@ -44,5 +44,32 @@ TEST(CliCapture, OutputNeverOverwritesTheMesh) {
   EXPECT_EQ(readText(dir.file("my.off")), kOff);
 }
 
+// -o is checked before the scene is built or GL is started: an empty path, a
+// directory, a missing folder are one-line errors naming -o (gen -o "" built
+// the whole scene, then failed with ": cannot rename temporary file ...").
+TEST(CliGen, OutputPathIsCheckedFirst) {
+  TempDir dir("gen_bad_output");
+  struct Case {
+    std::string output, message;
+  };
+  const Case cases[] = {
+      {"''", "-o: expected a file name, got an empty path"},
+      {dir.file(""), "-o " + dir.file("") + ": is a directory, expected a file name"},
+      {dir.file("sub/"), "-o " + dir.file("sub/") + ": expected a file name, got a folder path"},
+      {dir.file("missing/t.oitt"), "-o " + dir.file("missing/t.oitt") + ": folder " + dir.file("missing") +
+                                       " does not exist"},
+  };
+  for (const Case& c : cases) {
+    for (const std::string& cmd : {"gen particles -q --density 50 -o " + c.output, "capture -q --mesh bunny -o " + c.output}) {
+      CliResult r = runOitsim(cmd);
+      EXPECT_EQ(r.exit_code, 1) << cmd << "\n" << r.output;
+      EXPECT_EQ(r.output, "oitsim: error: " + c.message + "\n") << cmd;
+    }
+  }
+  std::filesystem::create_directory(dir.file("afile.oitt"));
+  CliResult r = runOitsim("gen glass -q -o " + dir.file("afile.oitt"));
+  EXPECT_NE(r.output.find("-o " + dir.file("afile.oitt") + ": is a directory"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace oit::test

@@ -185,5 +185,30 @@ TEST(CliInfoConvert, TooManyCsvDrawsAreRefusedAtTheRow) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.oitt")));
 }
 
+// convert's output and info --heatmap are checked before the trace is read.
+TEST(CliInfoConvert, OutputPathsAreCheckedFirst) {
+  TempDir dir("bad_outputs");
+  writeText(dir.file("t.csv"), kCsv);
+  const std::string in = dir.file("t.csv") + " --width 4 --height 2";
+  struct Case {
+    std::string cmd, message;
+  };
+  const Case cases[] = {
+      {"convert " + in + " ''", "output: expected a file name, got an empty path"},
+      {"convert " + in + " " + dir.file(""), "output " + dir.file("") + ": is a directory, expected a file name"},
+      {"convert " + in + " " + dir.file("no/c.oitt"), "output " + dir.file("no/c.oitt") + ": folder " +
+                                                          dir.file("no") + " does not exist"},
+      {"info " + in + " --heatmap ''", "--heatmap: expected a file name, got an empty path"},
+      {"info " + in + " --heatmap " + dir.file(""), "--heatmap " + dir.file("") + ": is a directory, expected a file name"},
+      {"info " + in + " --heatmap " + dir.file("no/h.pfm"), "--heatmap " + dir.file("no/h.pfm") + ": folder " +
+                                                                dir.file("no") + " does not exist"},
+  };
+  for (const Case& c : cases) {
+    CliResult r = runOitsim(c.cmd);
+    EXPECT_EQ(r.exit_code, 1) << c.cmd << "\n" << r.output;
+    EXPECT_EQ(r.output, "oitsim: error: " + c.message + "\n") << c.cmd;
+  }
+}
+
 }  // namespace
 }  // namespace oit::test
