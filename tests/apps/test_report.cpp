@@ -145,5 +145,45 @@ TEST_F(Report, PointsNotRunAreCountedApartFromFailures) {
             "no status.json and no report.json: the point started but did not finish (interrupted?)");
 }
 
+// Speed modes are compared only with the cycle-by-cycle run of the same
+// hardware: a cache.ways axis makes two groups, each against its own reference
+// (audit: both ways fell in one group and the ways=8 points were measured
+// against ways=2, a 15.9 % "error"). Errors are signed.
+TEST(ReportSpeedModes, GroupsByEveryRopParameterAndErrorsAreSigned) {
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";
+  TempDir dir("report-speed");
+  writeText(dir.file("spec.json"), R"({"traces": [{"gen": "glass", "width": 64, "height": 48}],
+    "base": {"mode": "timing", "algo": "mlab", "layers": 4},
+    "axes": {"cache.ways": [2, 8], "speed": [
+      {"label": "fast", "set": {"skip.idle_cycles": true, "sim.quantum_cycles": 200}},
+      {"label": "cycle", "set": {"skip.idle_cycles": false, "sim.quantum_cycles": 1}}]}})");
+  CliResult r = runOitsim("sweep -q " + dir.file("spec.json") + " --out " + dir.file("sw") + " -j 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = runOitsim("report -q " + dir.file("sw"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json res = readJson(dir.file("sw/results.json"));
+  std::map<std::string, uint64_t> cycles;  // "ways/label" -> timing.cycles
+  for (const auto& p : res["points"]) {
+    const auto& m = p["metrics"];
+    cycles[std::to_string(m["config.rop.cache.ways"].get<int>()) + "/" +
+           (m["config.rop.sim.quantum_cycles"].get<int>() == 1 ? "cycle" : "fast")] = m["timing.cycles"].get<uint64_t>();
+  }
+  ASSERT_EQ(cycles.size(), 4u);
+  const nlohmann::json sp = readJson(dir.file("sw/speed.json"));
+  ASSERT_EQ(sp["rows"].size(), 4u) << sp.dump();
+  for (const auto& row : sp["rows"]) {
+    const std::string cfg = row["config"].get<std::string>();
+    const std::string ways = cfg.find("cache.ways=2") != std::string::npos ? "2"
+                             : cfg.find("cache.ways=8") != std::string::npos ? "8" : "?";
+    ASSERT_NE(ways, "?") << cfg;  // the label names the setting that tells the groups apart
+    const bool ref = row["mode"] == "timing q=1 skip=off";
+    const double want = ref ? 0.0
+                            : 100.0 * (double(cycles[ways + "/fast"]) - double(cycles[ways + "/cycle"])) /
+                                  double(cycles[ways + "/cycle"]);
+    EXPECT_NEAR(row["cycle_err_pct"].get<double>(), want, 1e-9) << cfg << " " << row["mode"];
+  }
+  EXPECT_EQ(sp["modes"]["timing q=200 skip=on"]["groups"].get<int>(), 2);
+}
+
 }  // namespace
 }  // namespace oit::test
