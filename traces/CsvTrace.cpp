@@ -174,9 +174,9 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
     break;
   }
   if (in_.bad()) throw TraceError(path_, "read error");
-  if (!found_columns)
-    fail(in_.nextOffset(), std::nullopt, "header",
-         fmt::format("no column line '{}' (empty file or only comments)", kColumnLine));
+  if (!found_columns)  // lines are 1-based: an empty file's error is on line 1
+    throw TraceError::inCsv(path_, std::max<uint64_t>(in_.number(), 1), in_.nextOffset(), std::nullopt, "header",
+                            fmt::format("no column line '{}' (empty file or only comments)", kColumnLine));
   data_offset_ = in_.nextOffset();
   data_line_ = in_.number() + 1;
 

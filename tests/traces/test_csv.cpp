@@ -303,6 +303,8 @@ TEST_F(Csv, HeaderAndMetadataErrors) {
       {"# width 4\n# height 4\n" + cols + "# width 5\n", 4, "width", "width",
        "'# width' metadata must come before the column line"},
       {"# width 4\n", 1, "", "header", "no column line"},
+      {"", 1, "", "header", "no column line 'draw,prim,x,y,z,r,g,b,a,opaque' (empty file or only comments)"},
+      {"\n\n", 2, "", "header", "no column line"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
