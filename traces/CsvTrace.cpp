@@ -50,18 +50,25 @@ std::string quoteName(const std::string& name) {
   return q + '"';
 }
 
-// Shows the bytes a terminal would not (control bytes and DEL) as \xNN: the
-// text of a bad field is quoted in the message, and a NUL in it would end the
+// Shows the bytes a terminal would not print as text as \xNN: control bytes,
+// DEL, C1 controls (U+0080-U+009F) and every byte >= 0x80 that is not part of
+// a well-formed UTF-8 character (a binary or gzip file read as CSV). The text
+// of a bad field is quoted in the message, and a NUL in it would end the
 // message wherever what() is printed as a C string.
 std::string printable(std::string_view s) {
   std::string out;
   out.reserve(s.size());
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x20 || c == 0x7f)
+  for (size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    const size_t n = c < 0x80 ? 1 : utf8CharBytes(s, i);
+    const bool c1 = n == 2 && c == 0xC2 && static_cast<unsigned char>(s[i + 1]) < 0xA0;
+    if (c < 0x20 || c == 0x7f || n == 0 || c1) {
       out += fmt::format("\\x{:02x}", c);
-    else
-      out += ch;
+      ++i;
+    } else {
+      out.append(s.substr(i, n));
+      i += n;
+    }
   }
   return out;
 }
@@ -128,6 +135,8 @@ class CsvReader final : public FragmentSource {
                          std::string field, const std::string& msg) const {
     throw TraceError::inCsv(path_, in_.number(), byte_offset, record, printable(field), printable(msg));
   }
+  // A binary trace or a gzip file named .csv: say so rather than quote its bytes.
+  void refuseBinaryForms() const;
   void parseMetadata(std::string_view line);
   // The draw that would be entry kMaxDraws + 1 of the table.
   std::string tooManyDraws(uint32_t id) const {
@@ -157,6 +166,7 @@ class CsvReader final : public FragmentSource {
 CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
     : path_(path), in_(path), batch_(opts.batch_records) {
   if (!in_.isOpen()) throw TraceError(path_, fmt::format("cannot open: {}", std::strerror(errno)));
+  refuseBinaryForms();
   // Comment header, up to the column line.
   bool found_columns = false;
   while (in_.next()) {
@@ -203,6 +213,26 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
   rules_.draws = DrawSet(header_.draws);
   buf_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
   rewind();
+}
+
+void CsvReader::refuseBinaryForms() const {
+  char start[sizeof fv::kMagic] = {};
+  std::ifstream f(path_, std::ios::binary);
+  f.read(start, sizeof start);
+  const std::string_view have(start, static_cast<size_t>(f.gcount()));
+  auto hex = [&] {
+    std::string h;
+    for (const char c : have) h += fmt::format("{}{:02X}", h.empty() ? "" : " ", static_cast<unsigned char>(c));
+    return h;
+  };
+  if (have.size() >= 5 && std::memcmp(have.data(), fv::kMagic, 5) == 0)
+    throw TraceError::inCsv(path_, 1, 0, std::nullopt, "header",
+                            fmt::format("found {}, the magic of a binary trace: this looks like a binary .oitt trace "
+                                        "(the .csv extension makes it read as CSV; rename it or convert it)",
+                                        hex()));
+  if (have.size() >= 2 && static_cast<unsigned char>(have[0]) == 0x1F && static_cast<unsigned char>(have[1]) == 0x8B)
+    throw TraceError::inCsv(path_, 1, 0, std::nullopt, "header",
+                            fmt::format("found {}: the file is gzip-compressed: decompress first (gunzip)", hex()));
 }
 
 bool CsvReader::nextDataLine() {

@@ -74,6 +74,8 @@ std::optional<std::string> drawNameProblem(const std::string& name);
 // Index of the first byte of s that does not start a well-formed UTF-8
 // character (no overlong forms, surrogates or code points above U+10FFFF), or nullopt.
 std::optional<size_t> invalidUtf8At(std::string_view s);
+// Length of the well-formed UTF-8 character at s[i] (1 for ASCII), 0 if none starts there.
+size_t utf8CharBytes(std::string_view s, size_t i);
 // Checks camera planes; returns the problem or nullopt.
 std::optional<std::string> cameraProblem(float near_plane, float far_plane);
 

@@ -210,5 +210,30 @@ TEST(CliInfoConvert, OutputPathsAreCheckedFirst) {
   }
 }
 
+// A binary or gzipped trace named .csv is named as such, an empty .csv fails
+// on line 1, and no message carries raw non-text bytes.
+TEST(CliInfoConvert, CsvMessagesAreTextAndNameBinaryForms) {
+  TempDir dir("csv_binary_forms");
+  ASSERT_EQ(runOitsim("gen glass -q -o " + dir.file("g.oitt") + " --width 64 --height 48").exit_code, 0);
+  writeText(dir.file("g.csv"), readText(dir.file("g.oitt")));
+  writeText(dir.file("z.csv"), std::string("\x1F\x8B\x08\x00\x00\x00\x00\x00\x00\x03\xED\xC1\xFF", 13));
+  writeText(dir.file("e.csv"), "");
+  const std::pair<std::string, std::string> cases[] = {
+      {"g.csv", ": line 1, byte offset 0, field header: found 89 4F 49 54 54 0D 0A 1A, the magic of a binary "
+                "trace: this looks like a binary .oitt trace"},
+      {"z.csv", ": line 1, byte offset 0, field header: found 1F 8B 08 00 00 00 00 00: the file is "
+                "gzip-compressed: decompress first (gunzip)"},
+      {"e.csv", ": line 1, byte offset 0, field header: no column line"},
+  };
+  for (const auto& [name, msg] : cases) {
+    for (const std::string& cmd : {"info " + dir.file(name), "convert " + dir.file(name) + " " + dir.file("o.oitt")}) {
+      CliResult r = runOitsim(cmd + " --width 4 --height 4");
+      EXPECT_EQ(r.exit_code, 1) << cmd << "\n" << r.output;
+      EXPECT_NE(r.output.find(dir.file(name) + msg), std::string::npos) << cmd << "\n" << r.output;
+      for (const char c : r.output) EXPECT_LT(static_cast<unsigned char>(c), 0x80) << cmd << "\n" << r.output;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace oit::test

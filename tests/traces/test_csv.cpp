@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <limits>
 
@@ -261,6 +262,31 @@ TEST_F(Csv, ControlBytesInAFieldAreEscapedAndTheMessageIsWhole) {
       << e;
   const std::string tab = kHead + "1,0,1,1,0.5,0\x01,0,0,0.5,0\n";
   EXPECT_NE(csvError(tab).find("column r: '0\\x01' is not a decimal number"), std::string::npos) << csvError(tab);
+}
+
+// Bytes >= 0x80 that are not well-formed UTF-8 text are shown as \xNN too (a
+// binary file read as CSV printed its raw bytes); UTF-8 text stays as it is.
+TEST_F(Csv, NonTextBytesAreEscapedAndBinaryFormsAreNamed) {
+  const std::string cols = "draw,prim,x,y,z,r,g,b,a,opaque";
+  const std::string bad = csvError("\xFF\xFE" "d\xC2\x85\n");
+  EXPECT_EQ(bad, fmt::format("{}: line 1, byte offset 0, field header: expected the column line '{}', found "
+                             "'\\xff\\xfed\\xc2\\x85'",
+                             csv_, cols));
+  EXPECT_EQ(std::count_if(bad.begin(), bad.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x80; }), 0);
+  EXPECT_EQ(csvError("caf\xC3\xA9\n"),
+            fmt::format("{}: line 1, byte offset 0, field header: expected the column line '{}', found 'caf\xC3\xA9'",
+                        csv_, cols));
+  // A binary trace named .csv, and a gzipped CSV, say what they are.
+  writeTrace(bin_, makeHeader(4, 4, ColourEncoding::Fp32, {{1, DrawClass::Opaque, "o"}}), {});
+  writeFile(csv_, readFile(bin_));
+  EXPECT_EQ(traceErrorOf([&] { openTrace(csv_); }),
+            csv_ + ": line 1, byte offset 0, field header: found 89 4F 49 54 54 0D 0A 1A, the magic of a binary "
+                   "trace: this looks like a binary .oitt trace (the .csv extension makes it read as CSV; rename it "
+                   "or convert it)");
+  writeFile(csv_, std::string("\x1F\x8B\x08\x00\x00\x00\x00\x00\x00\x03\xED\xC1", 12));
+  EXPECT_EQ(traceErrorOf([&] { openTrace(csv_); }),
+            csv_ + ": line 1, byte offset 0, field header: found 1F 8B 08 00 00 00 00 00: the file is "
+                   "gzip-compressed: decompress first (gunzip)");
 }
 
 TEST_F(Csv, WrongColumnCounts) {
