@@ -4,6 +4,7 @@
 
 #include "apps/Commands.hpp"
 #include "apps/OutputFiles.hpp"
+#include "apps/TraceOptions.hpp"
 #include "apps/Progress.hpp"
 #include "traces/TraceIO.hpp"
 
@@ -13,9 +14,11 @@ namespace {
 struct ConvertArgs {
   std::string in, out, encoding;
   uint32_t width = 0, height = 0;
+  bool width_given = false, height_given = false;
 };
 
 void runConvert(const ConvertArgs& a) {
+  checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
   checkOutputFile("output", a.out);
   // The same file also through a symlink or another spelling of the path.
   checkNotInput("output", a.out, "trace", a.in);
@@ -46,11 +49,17 @@ void addConvertCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("convert", "Convert a trace between binary (.oitt) and CSV (.csv)");
   cmd->add_option("input", args->in, "Input trace")->required();
   cmd->add_option("output", args->out, "Output trace; .csv writes CSV, anything else binary")->required();
-  cmd->add_option("--width", args->width, "Frame width of a CSV input without a width comment");
-  cmd->add_option("--height", args->height, "Frame height of a CSV input without a height comment");
+  CLI::Option* width =
+      cmd->add_option("--width", args->width, "Frame width of a CSV input without a width comment (1..65535)");
+  CLI::Option* height =
+      cmd->add_option("--height", args->height, "Frame height of a CSV input without a height comment (1..65535)");
   cmd->add_option("--encoding", args->encoding,
                   "Colour encoding of the output: fp32 or unorm8 (default: as the input; unorm8 rounds)");
-  cmd->callback([args] { runConvert(*args); });
+  cmd->callback([args, width, height] {
+    args->width_given = width->count() > 0;
+    args->height_given = height->count() > 0;
+    runConvert(*args);
+  });
 }
 
 }  // namespace oit::cli

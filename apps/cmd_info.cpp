@@ -7,6 +7,7 @@
 
 #include "apps/Commands.hpp"
 #include "apps/OutputFiles.hpp"
+#include "apps/TraceOptions.hpp"
 #include "apps/Progress.hpp"
 #include "model/Image.hpp"
 #include "traces/TraceStats.hpp"
@@ -17,6 +18,7 @@ namespace {
 struct InfoArgs {
   std::string trace;
   uint32_t width = 0, height = 0;
+  bool width_given = false, height_given = false;
   bool json = false;
   std::string heatmap;  // --heatmap FILE.pfm
   bool heatmap_given = false;
@@ -79,6 +81,7 @@ void writeHeatmap(FragmentSource& src, const std::string& path) {
 }
 
 void runInfo(const InfoArgs& a) {
+  checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
   if (a.heatmap_given) {  // before the trace is read
     checkOutputFile("--heatmap", a.heatmap);
     checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
@@ -149,12 +152,16 @@ void addInfoCommand(CLI::App& app) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* cmd = app.add_subcommand("info", "Describe a trace: resolution, draws, depth complexity");
   cmd->add_option("trace", args->trace, "Trace file (.oitt binary or .csv)")->required();
-  cmd->add_option("--width", args->width, "Frame width of a CSV trace without a width comment");
-  cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment");
+  CLI::Option* width =
+      cmd->add_option("--width", args->width, "Frame width of a CSV trace without a width comment (1..65535)");
+  CLI::Option* height =
+      cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment (1..65535)");
   cmd->add_flag("--json", args->json, "Print the statistics as JSON");
   CLI::Option* heatmap = cmd->add_option("--heatmap", args->heatmap,
                                          "Also write transparent fragments per pixel (depth complexity) as a PFM file");
-  cmd->callback([args, heatmap] {
+  cmd->callback([args, heatmap, width, height] {
+    args->width_given = width->count() > 0;
+    args->height_given = height->count() > 0;
     args->heatmap_given = heatmap->count() > 0;
     runInfo(*args);
   });

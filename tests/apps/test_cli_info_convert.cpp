@@ -235,5 +235,31 @@ TEST(CliInfoConvert, CsvMessagesAreTextAndNameBinaryForms) {
   }
 }
 
+// --width/--height of a CSV without size comments: 0 and values above 65535
+// are errors naming the option and the range, in info and convert as in run
+// (info and convert took --width 0 for absent and blamed 70000 on the file).
+TEST(CliInfoConvert, FrameSizeOptionsAreCheckedLikeRun) {
+  TempDir dir("size_options");
+  writeText(dir.file("t.csv"), kCsv);
+  const std::string t = dir.file("t.csv");
+  const std::pair<std::string, std::string> cases[] = {
+      {"--width 0 --height 2", "--width 0: expected a frame width of at least 1 pixel"},
+      {"--width 4 --height 0", "--height 0: expected a frame height of at least 1 pixel"},
+      {"--width 70000 --height 2", "--width 70000: expected a frame width of 1..65535 pixels (x and y are u16)"},
+      {"--width 4 --height 65536", "--height 65536: expected a frame height of 1..65535 pixels (x and y are u16)"},
+  };
+  for (const auto& [opts, msg] : cases) {
+    for (const std::string& cmd : {"info " + t, "convert " + t + " " + dir.file("o.oitt")}) {
+      CliResult r = runOitsim(cmd + " " + opts);
+      EXPECT_EQ(r.exit_code, 1) << cmd << " " << opts << "\n" << r.output;
+      EXPECT_EQ(r.output, "oitsim: error: " + msg + "\n") << cmd << " " << opts;
+    }
+  }
+  // run says the same for 0.
+  CliResult run = runOitsim("run --mode functional --trace " + t + " --width 0 --height 2 --out " + dir.file("r"));
+  EXPECT_EQ(run.output, "oitsim: error: --width 0: expected a frame width of at least 1 pixel\n");
+  EXPECT_EQ(runOitsim("info " + t + " --width 4 --height 2 --json").exit_code, 0);
+}
+
 }  // namespace
 }  // namespace oit::test
