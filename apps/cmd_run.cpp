@@ -15,6 +15,8 @@
 #include <filesystem>
 
 #include "apps/Commands.hpp"
+#include "apps/OutputFiles.hpp"
+#include "apps/TraceOptions.hpp"
 #include "apps/Progress.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
@@ -124,10 +126,7 @@ void checkOptions(const RunArgs& a) {
     throw std::invalid_argument("--background: expected r,g,b (three linear values in [0,1])");
   for (float c : a.background)
     if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("--background: each channel must be in [0,1]");
-  if (a.width_given && a.width == 0)
-    throw std::invalid_argument("--width 0: expected a frame width of at least 1 pixel");
-  if (a.height_given && a.height == 0)
-    throw std::invalid_argument("--height 0: expected a frame height of at least 1 pixel");
+  checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
   checkOutputFolder("--out", a.out);
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
@@ -136,13 +135,6 @@ void checkOptions(const RunArgs& a) {
 
 // The files a run writes into --out, the report last.
 constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"};
-
-// Whether two paths name the same file (existing: same inode; else same normal form).
-bool samePath(const fs::path& a, const fs::path& b) {
-  std::error_code ec;
-  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
-  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
-}
 
 // Output files are staged under temporary names and renamed together at the
 // end; a run that fails or is interrupted leaves none of them behind.
@@ -178,10 +170,10 @@ void runReplay(RunArgs& a) {
   const fs::path out(a.out);
   // Never overwrite or remove the input: no output may be the trace itself.
   for (const char* name : kOutputs)
-    if (samePath(out / name, a.trace))
+    if (sameFile((out / name).string(), a.trace))
       throw std::invalid_argument(fmt::format("--out {}: {} would overwrite the input trace --trace {}", a.out,
                                               (out / name).string(), a.trace));
-  if (!a.vcd.empty() && samePath(rop::vcdFilePath(a.vcd), a.trace))
+  if (!a.vcd.empty() && sameFile(rop::vcdFilePath(a.vcd), a.trace))
     throw std::invalid_argument(
         fmt::format("--vcd {}: {} is the input trace --trace {}", a.vcd, rop::vcdFilePath(a.vcd), a.trace));
   // An earlier run's outputs in the folder must never pass for this run's, also
