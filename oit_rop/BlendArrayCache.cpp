@@ -54,7 +54,6 @@ Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
   ++stats_.accesses;
   ++stats_.hits;
   line.stamp = ++stamp_;
-  in_use_ += line.pins == 0;
   ++line.pins;
   if (write) {
     line.dirty = true;
@@ -135,7 +134,6 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   victim.stamp = ++stamp_;
   victim.ready = ready;
   victim.pins = 1;
-  ++in_use_;
   line_of_[tile] = static_cast<uint32_t>(victim_index);
   if (write) touched_[tile] = 1;
 
@@ -145,15 +143,8 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   return ready;
 }
 
-bool BlendArrayCache::release(uint32_t tile) {
-  const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
-  if (index == kInvalid || lines_[index].pins == 0)
-    throw std::logic_error(fmt::format("BlendArrayCache::release: tile {} has no acquire in use", tile));
-  if (--lines_[index].pins != 0) return false;
-  --in_use_;
-  if (!refused_by_set_ || index / ways_ != refused_set_) return false;
-  refused_by_set_ = false;
-  return true;
+void BlendArrayCache::releaseWithoutAcquire(uint32_t tile) {
+  throw std::logic_error(fmt::format("BlendArrayCache::release: tile {} has no acquire in use", tile));
 }
 
 bool BlendArrayCache::touched(uint32_t tile) const { return tile < tiles_ && touched_[tile]; }
@@ -165,6 +156,12 @@ uint32_t BlendArrayCache::sets() const { return sets_; }
 uint32_t BlendArrayCache::tiles() const { return tiles_; }
 uint64_t BlendArrayCache::lineAddress(uint32_t tile) const { return base_ + uint64_t(tile) * line_bytes_; }
 const CacheStats& BlendArrayCache::stats() const { return stats_; }
+
+uint32_t BlendArrayCache::linesInUse() const {
+  uint32_t n = 0;
+  for (const Line& l : lines_) n += l.pins != 0 ? 1u : 0u;
+  return n;
+}
 
 uint32_t BlendArrayCache::missesInFlight(Cycle now) const {
   uint32_t n = 0;

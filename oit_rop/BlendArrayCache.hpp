@@ -59,7 +59,15 @@ class BlendArrayCache {
   // The use of one acquire() of `tile` ended (its blend or resolve is done).
   // Returns true when this made a line of the set of the last refusedBySet()
   // acquire free (the refused access may now be retried).
-  bool release(uint32_t tile);
+  bool release(uint32_t tile) {  // inline: once per fragment
+    const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
+    if (index == kInvalid || lines_[index].pins == 0) [[unlikely]]
+      releaseWithoutAcquire(tile);
+    if (--lines_[index].pins != 0) return false;
+    if (!refused_by_set_ || index / ways_ != refused_set_) return false;
+    refused_by_set_ = false;
+    return true;
+  }
 
   bool touched(uint32_t tile) const;
   bool resident(uint32_t tile) const;
@@ -80,7 +88,7 @@ class BlendArrayCache {
   // (a retry can succeed only after a release()), false when the miss queue
   // was full (a retry can succeed at missQueueFreesAt()).
   bool refusedBySet() const { return refused_by_set_; }
-  uint32_t linesInUse() const { return in_use_; }  // lines pinned by acquires not yet released
+  uint32_t linesInUse() const;  // lines pinned by acquires not yet released (a scan: for tests)
 
  private:
   static constexpr uint32_t kInvalid = ~uint32_t(0);
@@ -92,6 +100,7 @@ class BlendArrayCache {
     uint32_t pins = 0;   // acquires of this line whose use has not ended (no victim while > 0)
   };
   Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident
+  [[noreturn]] static void releaseWithoutAcquire(uint32_t tile);  // release()'s caller bug
 
   CacheConfig cfg_;
   uint32_t line_bytes_;
@@ -114,7 +123,6 @@ class BlendArrayCache {
   uint64_t stamp_ = 0;
   bool refused_by_set_ = false;
   uint32_t refused_set_ = 0;  // set of the last acquire refused by its set
-  uint32_t in_use_ = 0;  // lines with pins > 0
   CacheStats stats_;
 };
 
