@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Print the Markdown tables of reports/repro/README.md from the committed
+results (so the README's numbers come from the tables, not from hand copying).
+
+    python3 reports/repro/tables.py hardware-pareto   # from hardware-pareto/results.csv
+    python3 reports/repro/tables.py speed-modes       # from speed-modes/speed.json
+"""
+import csv
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+MIB = 1024.0 * 1024.0
+
+
+def grouped(n):
+    """3776640 -> '3 776 640' (the README's thousands separator)."""
+    return f"{n:,}".replace(",", " ")
+
+
+def hardware_pareto():
+    rows = list(csv.DictReader(open(os.path.join(HERE, "hardware-pareto", "results.csv"), newline="")))
+    order = {"particles": 0, "hair": 1}
+    algos = {"mlab": 0, "hybrid": 1, "adaptive": 2}
+    rows.sort(key=lambda r: (order.get(r["trace"], 9), algos.get(r["axis.algo"], 9), int(r["axis.layers"])))
+    print("| trace | algorithm k | frame time (us) | DRAM read+written (MiB) | footprint allocated (MiB) "
+          "| lock wait cycles | RMSE | SSIM |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        dram = int(r["memory.dram_read_bytes.total"]) + int(r["memory.dram_write_bytes.total"])
+        foot = sum(int(r[f"memory.footprint.allocated.{s}"]) for s in ("blend_arrays", "colour", "depth", "resolve"))
+        print(f"| {r['trace']} | {r['axis.algo']} {r['axis.layers']} | {float(r['timing.frame_time_us']):.0f} "
+              f"| {dram / MIB:.1f} | {foot / MIB:.2f} | {r['lock.wait_cycles']} "
+              f"| {float(r['image.metrics.rmse']):.4f} | {float(r['image.metrics.ssim']):.4f} |")
+
+
+def speed_modes():
+    data = json.load(open(os.path.join(HERE, "speed-modes", "speed.json")))
+    cols = ["timing q=1 skip=off", "functional", "timing q=200 skip=on", "timing q=1000 skip=on",
+            "timing q=100000 skip=on"]
+    table = {}
+    for r in data["rows"]:
+        table.setdefault((r["trace"], r["config"]), {})[r["mode"]] = r
+    print("| trace, config | cycle-by-cycle | functional | fast: skip idle, q=200 (default) | skip idle, q=1000 "
+          "| skip idle, q=100000 |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    order = {"particles": 0, "hair": 1}
+    for (trace, config) in sorted(table, key=lambda k: (order.get(k[0], 9), k[1].split()[0] != "mlab")):
+        modes = table[(trace, config)]
+        name = config.split(" k=")[0] + config.split(" k=")[1].split()[0]  # "mlab k=4 rgba8t8z32" -> "mlab4"
+        cells = []
+        for i, m in enumerate(cols):
+            r = modes.get(m)
+            if r is None:
+                cells.append("-")
+            elif i == 0:
+                cells.append(f"{r['wall_s']:.2f} s, {grouped(r['cycles'])} cycles")
+            elif m == "functional":
+                cells.append(f"{r['wall_s']:.2f} s ({r['speedup']:.1f}x), no cycles")
+            else:
+                unit = " cycles" if i == 2 else ""
+                cells.append(f"{r['wall_s']:.2f} s ({r['speedup']:.1f}x), {r['cycle_err_pct']:+.3f} %{unit}")
+        print(f"| {trace} {name} | " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    which = sys.argv[1] if len(sys.argv) > 1 else ""
+    if which == "hardware-pareto":
+        hardware_pareto()
+    elif which == "speed-modes":
+        speed_modes()
+    else:
+        sys.exit("usage: tables.py hardware-pareto|speed-modes")
