@@ -9,6 +9,7 @@
 #include <string>
 
 #include "apps/Commands.hpp"
+#include "apps/OutputFiles.hpp"
 
 namespace oit::cli {
 namespace {
@@ -60,11 +61,7 @@ void checkOutputFolder(const std::string& option, const std::string& folder) {
   // The folder, or the nearest part of its path that exists (where it will be created).
   fs::path probe = fs::absolute(fs::path(folder), ec);
   while (!probe.empty() && !fs::exists(probe, ec) && probe != probe.parent_path()) probe = probe.parent_path();
-  if (!fs::is_directory(probe, ec))
-    throw std::invalid_argument(fmt::format("{} {}: {} is not a directory", option, folder, probe.string()));
-  if (::access(probe.c_str(), W_OK | X_OK) != 0)
-    throw std::invalid_argument(
-        fmt::format("{} {}: cannot write in {}: {}", option, folder, probe.string(), std::strerror(errno)));
+  checkWritableDirectory(option, folder, probe.string());
 }
 
 }  // namespace oit::cli

@@ -40,11 +40,15 @@ void checkOutputFile(const std::string& option, const std::string& path) {
   const fs::path folder = p.parent_path().empty() ? fs::path(".") : p.parent_path();
   if (!fs::exists(folder, ec))
     throw std::invalid_argument(fmt::format("{} {}: folder {} does not exist", option, path, folder.string()));
-  if (!fs::is_directory(folder, ec))
-    throw std::invalid_argument(fmt::format("{} {}: {} is not a directory", option, path, folder.string()));
-  if (::access(folder.c_str(), W_OK | X_OK) != 0)
-    throw std::invalid_argument(
-        fmt::format("{} {}: cannot write in {}: {}", option, path, folder.string(), std::strerror(errno)));
+  checkWritableDirectory(option, path, folder.string());
+}
+
+void checkWritableDirectory(const std::string& option, const std::string& given, const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw std::invalid_argument(fmt::format("{} {}: {} is not a directory", option, given, dir));
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw std::invalid_argument(fmt::format("{} {}: cannot write in {}: {}", option, given, dir, std::strerror(errno)));
 }
 
 }  // namespace oit::cli

@@ -18,6 +18,10 @@ bool sameFile(const std::string& a, const std::string& b);
 void checkNotInput(const std::string& option, const std::string& output, const std::string& input_what,
                    const std::string& input);
 
+// Throws std::invalid_argument "<option> <given>: ..." unless `dir` is an
+// existing directory this process may create files in.
+void checkWritableDirectory(const std::string& option, const std::string& given, const std::string& dir);
+
 // Throws std::invalid_argument naming the option unless `path` can be created
 // as a file: not empty, not a directory, and its folder exists and is writable.
 void checkOutputFile(const std::string& option, const std::string& path);
