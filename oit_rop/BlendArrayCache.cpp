@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <utility>
 #include <stdexcept>
 
 namespace oit::rop {
@@ -28,8 +29,11 @@ CacheGeometry cacheGeometry(const CacheConfig& cache, uint32_t line_bytes) {
 }
 
 BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base_address,
-                                 MemorySystem& memory, bool fast_clear)
-    : cfg_(cfg), line_bytes_(line_bytes), tiles_(tiles), base_(base_address), memory_(memory), fast_clear_(fast_clear) {
+                                 MemorySystem& memory, bool fast_clear, std::vector<uint32_t> set_index)
+    : cfg_(cfg), line_bytes_(line_bytes), tiles_(tiles), base_(base_address), memory_(memory), fast_clear_(fast_clear),
+      set_index_(std::move(set_index)) {
+  if (!set_index_.empty() && set_index_.size() != tiles)
+    throw std::invalid_argument("BlendArrayCache: set_index must have one entry per tile");
   if (line_bytes == 0) throw std::invalid_argument("BlendArrayCache: line_bytes must be > 0");
   // A zero-entry miss queue could never serve a miss: the caller would stall forever.
   if (cfg.miss_queue == 0) throw std::invalid_argument("BlendArrayCache: miss_queue must be >= 1");
@@ -96,7 +100,7 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   // would let more fills be in flight than the cache has lines). Invalid lines
   // have stamp 0 and valid ones distinct stamps >= 1, so this is the first
   // unpinned way with the smallest stamp.
-  const uint32_t set = tile % sets_;
+  const uint32_t set = (set_index_.empty() ? tile : set_index_[tile]) % sets_;
   const size_t first = size_t(set) * ways_;
   size_t victim_index = kInvalid;
   for (size_t i = first; i < first + ways_; ++i)

@@ -44,8 +44,11 @@ class BlendArrayCache {
  public:
   // base_address: where the full-screen arrays start in DRAM; line i (tile i)
   // lives at base_address + i * line_bytes.
+  // set_index (optional, one per tile): the number the set is chosen by, set =
+  // set_index[tile] % sets (a partition passes its local tile numbers,
+  // FrameGeometry::local); without it, the tile number itself.
   BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base_address,
-                  MemorySystem& memory, bool fast_clear);
+                  MemorySystem& memory, bool fast_clear, std::vector<uint32_t> set_index = {});
 
   // A fragment of `tile` needs its pixel's array at cycle `now`. Returns the
   // cycle the line is available (hit: now + hit_latency; miss: when the fill
@@ -114,6 +117,7 @@ class BlendArrayCache {
   // Per tile: index in lines_ of the line holding it, kInvalid if none. The
   // same answer as searching the tile's set for its tag, without the search.
   std::vector<uint32_t> line_of_;
+  std::vector<uint32_t> set_index_;  // per tile: set = set_index_[tile] % sets_ (empty: the tile)
   std::vector<Cycle> miss_queue_;  // per entry: cycle it frees (<= now: free)
   // The largest miss_queue_ entry, exact: an entry is only ever overwritten by a
   // later cycle (it is free, <= now, and the new one is >= now).

@@ -1,11 +1,12 @@
 #include "oit_rop/EarlyDepth.hpp"
 
 #include <algorithm>
+#include <utility>
 
 namespace oit::rop {
 
 EarlyDepth::EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t tile_bytes, uint64_t depth_base,
-                       MemoryPort& mem, unsigned depth_tiles)
+                       MemoryPort& mem, unsigned depth_tiles, std::vector<uint32_t> slot_index)
     : cfg_(cfg),
       rate_(per_clock),
       tile_bytes_(tile_bytes),
@@ -13,10 +14,11 @@ EarlyDepth::EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t t
       mem_(mem),
       tag_(std::max(1u, depth_tiles), 0),
       tag_ready_(std::max(1u, depth_tiles), 0),
+      slot_index_(std::move(slot_index)),
       q_(256) {}
 
 Cycle EarlyDepth::depthTile(Cycle now, uint32_t tile) {
-  const size_t slot = tile % tag_.size();
+  const size_t slot = (slot_index_.empty() ? tile : slot_index_[tile]) % tag_.size();
   if (tag_[slot] == tile + 1) {
     ++stats_.depth_buffer_hits;
   } else {

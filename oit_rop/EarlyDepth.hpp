@@ -26,7 +26,10 @@ struct EarlyDepthStats {
 class EarlyDepth {
  public:
   EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t tile_bytes, uint64_t depth_base,
-             MemoryPort& mem, unsigned depth_tiles = 16);
+             MemoryPort& mem, unsigned depth_tiles = 16, std::vector<uint32_t> slot_index = {});
+  // slot_index (optional, one per tile): the depth-tile buffer is direct mapped
+  // by slot_index[tile] % depth_tiles (a partition passes its local tile
+  // numbers, FrameGeometry::local); without it, by the tile number.
 
   // A shaded fragment arrives; `needs_read` = the HiZ could not decide it.
   void push(Cycle now, uint32_t token, uint32_t tile, bool needs_read) {  // inline: once per fragment
@@ -77,6 +80,7 @@ class EarlyDepth {
   uint64_t depth_base_;
   MemoryPort& mem_;
   std::vector<uint32_t> tag_;    // tile + 1 (0 = empty)
+  std::vector<uint32_t> slot_index_;  // per tile (empty: the tile)
   std::vector<Cycle> tag_ready_;
   Fifo<Entry> q_;
   Cycle last_ready_ = 0;  // in order: nobody leaves before the one ahead

@@ -24,8 +24,13 @@ FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
   for (uint32_t x = 0; x < w; ++x) tile_col[x] = x / tile_w;
   for (uint32_t y = 0; y < h; ++y) tile_row[y] = (y / tile_h) * tiles_x;
   owner.resize(size_t(tiles_x) * tiles_y);
+  local.resize(owner.size());
+  const uint32_t per_row = (tiles_x + partitions - 1) / partitions;  // a partition's tiles in one row, at most
   for (uint32_t ty = 0; ty < tiles_y; ++ty)
-    for (uint32_t tx = 0; tx < tiles_x; ++tx) owner[size_t(ty) * tiles_x + tx] = uint8_t((tx + ty) % partitions);
+    for (uint32_t tx = 0; tx < tiles_x; ++tx) {
+      owner[size_t(ty) * tiles_x + tx] = uint8_t((tx + ty) % partitions);
+      local[size_t(ty) * tiles_x + tx] = ty * per_row + tx / partitions;  // tx = r + N j: j is unique in the row
+    }
 }
 
 FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,

@@ -34,6 +34,11 @@ struct FrameGeometry {
   std::vector<uint32_t> tile_col;   // x -> tile column
   std::vector<uint32_t> tile_row;   // y -> tile row * tiles_x
   std::vector<uint8_t> owner;       // tile -> partition
+  // tile -> its number among its partition's tiles, ty * ceil(tiles_x / N) + tx / N:
+  // what a partition's cache sets and depth-tile buffer are indexed by (the
+  // global number would use only some of them: a partition's tiles all share
+  // one residue mod N when tiles_x = 1 mod N).
+  std::vector<uint32_t> local;
 
   FrameGeometry() = default;
   FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p);
@@ -41,6 +46,7 @@ struct FrameGeometry {
   uint32_t tilePixels() const { return tile_w * tile_h; }
   uint32_t tileOf(uint32_t x, uint32_t y) const { return tile_row[y] + tile_col[x]; }
   uint32_t partitionOf(uint32_t tile) const { return owner[tile]; }
+  uint32_t localOf(uint32_t tile) const { return local[tile]; }
 };
 
 // One routed fragment (16 bytes; culled and inserted fragments alike).

@@ -633,5 +633,26 @@ TEST(BlendArrayCache, MissesInFlightNeverExceedTheLines) {
   EXPECT_GT(cache.stats().set_in_use, 0u);
   EXPECT_EQ(cache.stats().accesses, 60u);
 }
+// The set comes from set_index when given (a partition's own tile numbers):
+// tiles 1, 3, 5, 7 in a 2-set, 2-way cache all map to set 1 by the tile number
+// (4 tiles in 2 ways: a cyclic sweep always misses) and to sets 0, 1, 0, 1 by
+// the index tile / 2 (they fit: 4 compulsory misses).
+TEST(BlendArrayCache, SetIndexChoosesTheSet) {
+  for (bool local : {false, true}) {
+    MemorySystem mem(roundDram(), kMhz);
+    std::vector<uint32_t> index;
+    if (local)
+      for (uint32_t t = 0; t < 8; ++t) index.push_back(t / 2);
+    BlendArrayCache cache(cacheOf(4, 2), kLine, 8, 0, mem, false, index);
+    ASSERT_EQ(cache.sets(), 2u);
+    Cycle now = 0;
+    for (int sweep = 0; sweep < 3; ++sweep)
+      for (uint32_t t : {1u, 3u, 5u, 7u}) now = acquireRetrying(cache, now, t, true) + 1;
+    EXPECT_EQ(cache.stats().misses, local ? 4u : 12u) << local;
+  }
+  MemorySystem mem(roundDram(), kMhz);
+  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), kLine, 8, 0, mem, false, {0, 1}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace oit::rop
