@@ -113,8 +113,9 @@ bool isWhole(const ojson& v, long long min) {
 // One ROP parameter on its own (name, type, range); the constraints between
 // parameters are checked per point once the preset and every --set are known.
 void validateRopParameter(const std::string& key, const ojson& v, const std::string& where) {
+  const std::string text = scalarText(v, where);  // its own error names `where` once
   try {
-    rop::ConfigTree::forPreset("igpu").set(key, scalarText(v, where));
+    rop::ConfigTree::forPreset("igpu").set(key, text);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(where + ": " + key + " = " + v.dump() + ": " + e.what());
   }
@@ -210,6 +211,17 @@ void applySetting(Settings& s, const std::string& key, const ojson& v, const std
     throw std::invalid_argument(where + ": unknown setting '" + key + "' (expected " + known +
                                 "set, or a ROP parameter a.b.c; see `oitsim config`)");
   }
+}
+
+// One object of a spec (base, or one bundle value of an axis) may name a ROP
+// parameter once: in "set" and as a dotted key it would silently be the later
+// one, as a key repeated in a config file, which that refuses.
+void checkEachRopParameterOnce(const Settings& s, const std::string& where) {
+  std::set<std::string> seen;
+  for (const auto& [key, value] : s.sets)
+    if (!seen.insert(key).second)
+      throw std::invalid_argument(where + ": ROP parameter " + key +
+                                  " is given twice (in \"set\" and as a key, or twice in \"set\"); give it once");
 }
 
 std::string sanitize(const std::string& s) {
@@ -437,6 +449,7 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
     if (!spec["base"].is_object()) throw std::invalid_argument("sweep spec " + specPath + ": 'base' must be an object");
     for (auto it = spec["base"].begin(); it != spec["base"].end(); ++it)
       applySetting(base, it.key(), it.value(), "sweep spec " + specPath + ": base." + it.key(), dir);
+    checkEachRopParameterOnce(base, "sweep spec " + specPath + ": base");
   }
   struct Value {
     std::string label;
@@ -459,6 +472,7 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
           for (auto kv = v.begin(); kv != v.end(); ++kv)
             if (kv.key() != "label")
               applySetting(probe, kv.key(), kv.value(), fmt::format("{}[{}].{}", where, i, kv.key()), dir);
+          checkEachRopParameterOnce(probe, fmt::format("{}[{}]", where, i));
         } else {
           val.label = scalarText(v, where);
           applySetting(probe, it.key(), v, fmt::format("{}[{}]", where, i), dir);

@@ -41,8 +41,10 @@ extern "C" int sc_main(int argc, char* argv[]) {
       [](std::string& v) -> std::string {
         uint64_t x = 0;
         const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+        if (ec == std::errc::result_out_of_range && end == v.data() + v.size())
+          return "'" + v + "' is too large for this option";
         if (v.empty() || ec != std::errc() || end != v.data() + v.size())
-          return "expected a non-negative integer below 2^64, got '" + v + "'";
+          return "expected a non-negative integer, got '" + v + "'";
         return {};
       },
       "UINT");
@@ -63,8 +65,37 @@ extern "C" int sc_main(int argc, char* argv[]) {
       return 1;
     }
   }
+  // An option before the subcommand that oitsim itself does not have (CLI11
+  // said "A subcommand is required", or went on to the subcommand's errors).
+  if (argc > 1 && argv[1][0] == '-') {
+    const std::string given(argv[1]);
+    const std::string name = given.substr(0, given.find('='));
+    bool known = false;
+    for (const CLI::Option* o : app.get_options()) known = known || o->check_name(name);
+    if (!known) {
+      fmt::print(stderr,
+                 "oitsim: error: unknown option '{}' before the subcommand (oitsim takes --help and --version; "
+                 "a subcommand's options go after it, e.g. oitsim run --help)\n",
+                 name);
+      return 1;
+    }
+  }
   try {
     app.parse(argc, argv);
+  } catch (const CLI::ConversionError& e) {
+    // "Could not convert: --width = 4294967297": a number too large for the
+    // option's type (the digits-only check above lets up to 2^64 - 1 through).
+    std::fflush(stdout);
+    std::string what = e.what();
+    const std::string prefix = "Could not convert: ";
+    if (what.rfind(prefix, 0) == 0) {
+      what = what.substr(prefix.size());
+      const size_t eq = what.find(" = ");
+      if (eq != std::string::npos) what = what.substr(0, eq) + " " + what.substr(eq + 3);
+      what += ": not a value this option takes (too large?)";
+    }
+    fmt::print(stderr, "oitsim: error: {} (see --help)\n", what);
+    return 1;
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     // One line naming the option, exit code 1, as for every other bad input.

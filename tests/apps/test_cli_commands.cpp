@@ -22,6 +22,16 @@ TEST(CliCommands, UnknownSubcommandIsNamed) {
   // A known one still runs.
   r = runOitsim("scenes");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+  // An unknown option before the subcommand is named (it was "A subcommand is
+  // required", or the subcommand's own errors when one followed).
+  for (const char* args : {"--bogus", "--bogus run", "--bogus=1 scenes"}) {
+    r = runOitsim(args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_EQ(r.output.rfind("oitsim: error: unknown option '--bogus' before the subcommand", 0), 0u)
+        << args << ": " << r.output;
+  }
+  r = runOitsim("--version");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
 // --markdown prints every preset's defaults; options that pick one

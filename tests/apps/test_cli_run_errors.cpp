@@ -284,11 +284,14 @@ TEST_F(CliRunErrors, ZeroWidthOrHeightIsRefusedAtTheOption) {
 TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
   const std::string out = dir_->file("badnum");
   const std::pair<const char*, const char*> cases[] = {
-      {"--seed -5", "oitsim: error: --seed: expected a non-negative integer below 2^64, got '-5' (see --help)\n"},
+      {"--seed -5", "oitsim: error: --seed: expected a non-negative integer, got '-5' (see --help)\n"},
       {"--seed 18446744073709551616",
-       "oitsim: error: --seed: expected a non-negative integer below 2^64, got '18446744073709551616' (see --help)\n"},
-      {"-k 2.0", "oitsim: error: --layers: expected a non-negative integer below 2^64, got '2.0' (see --help)\n"},
-      {"-k 4294967296", "oitsim: error: Could not convert: --layers = 4294967296 (see --help)\n"},
+       "oitsim: error: --seed: '18446744073709551616' is too large for this option (see --help)\n"},
+      // Below 2^64 but beyond a 32-bit option: named, not the library's "Could not convert".
+      {"--width 4294967297",
+       "oitsim: error: --width 4294967297: not a value this option takes (too large?) (see --help)\n"},
+      {"-k 2.0", "oitsim: error: --layers: expected a non-negative integer, got '2.0' (see --help)\n"},
+      {"-k 4294967296", "oitsim: error: --layers 4294967296: not a value this option takes (too large?) (see --help)\n"},
   };
   for (const auto& [args, message] : cases) {
     CliResult r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " " + args);

@@ -343,6 +343,17 @@ TEST(SweepErrors, SpecMustBeAnObjectWithEachKeyOnce) {
                     "sweep spec " + d.file("s.json") + ": key 'base.mode' appears twice in the same object");
   expectSpecRefused(d, R"({"traces": ["a.oitt", {"gen": "glass", "gen": "hair"}]})",
                     "sweep spec " + d.file("s.json") + ": key 'traces[1].gen' appears twice in the same object");
+  // One ROP parameter in "set" and as a dotted key of the same object (the
+  // later one won silently), in base and in an axis bundle.
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass"}], "base": {"set": {"cache.ways": 2}, "cache.ways": 4}})",
+                    "sweep spec " + d.file("s.json") + ": base: ROP parameter cache.ways is given twice");
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass"}],
+      "axes": {"speed": [{"label": "a", "cache.ways": 2, "set": {"cache.ways": 8}}]}})",
+                    "sweep spec " + d.file("s.json") + ": axes.speed[0]: ROP parameter cache.ways is given twice");
+  // A nested object in "set" names its place once (the prefix was printed twice).
+  expectSpecRefused(d, R"({"traces": [{"gen": "glass"}], "base": {"set": {"cache": {"ways": 4}}}})",
+                    "oitsim: error: sweep spec " + d.file("s.json") +
+                        ": base.set.cache: expected a string, number or boolean, got {\"ways\":4}\n");
 }
 
 // --out that cannot be a folder: one line naming the option, as `oitsim run --out`.
