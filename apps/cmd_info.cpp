@@ -87,6 +87,8 @@ void runInfo(const InfoArgs& a) {
     checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
   }
   auto src = openTraceWithSize(a.trace, a.width, a.height);
+  // Per-pixel depth-complexity counts: transparent, opaque and all (3 x u32).
+  checkFrameFitsInMemory(a.trace, src->header().width, src->header().height, 12, "its per-pixel counts");
   if (a.heatmap_given) {
     writeHeatmap(*src, a.heatmap);
     src->rewind();

@@ -205,6 +205,11 @@ void runReplay(RunArgs& a) {
   auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
   auto src = openTraceWithSize(a.trace, a.width, a.height);  // header and size are validated here
   const TraceHeader& h = src->header();
+  // Per pixel at least: the algorithm's arrays, the reference A-buffer's head
+  // (4 B), the opaque layer (depth + colour, 16 B) and three RGB float images
+  // (image, reference, difference).
+  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12,
+                         "the " + a.algo + " arrays, the reference and the images");
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
 
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "CliRunner.hpp"
+#include "apps/TraceOptions.hpp"
 
 namespace oit::test {
 namespace {
@@ -259,6 +260,26 @@ TEST(CliInfoConvert, FrameSizeOptionsAreCheckedLikeRun) {
   CliResult run = runOitsim("run --mode functional --trace " + t + " --width 0 --height 2 --out " + dir.file("r"));
   EXPECT_EQ(run.output, "oitsim: error: --width 0: expected a frame width of at least 1 pixel\n");
   EXPECT_EQ(runOitsim("info " + t + " --width 4 --height 2 --json").exit_code, 0);
+}
+
+// A legal frame too large for this machine is an error naming the trace, the
+// frame and the memory (it was a bare std::bad_alloc, or the kernel killed the
+// process part way through).
+TEST(CliInfoConvert, FrameTooLargeForThisMachineIsNamed) {
+  const uint64_t need = uint64_t(65535) * 65535 * 12;  // info's per-pixel counts
+  if (cli::machineMemoryBytes() == 0 || cli::machineMemoryBytes() >= need)
+    GTEST_SKIP() << "this machine has room for a 65535 x 65535 frame";
+  TempDir d("cli_huge");
+  const std::string t = d.file("huge.csv");
+  writeText(t, "# width 65535\n# height 65535\ndraw,prim,x,y,z,r,g,b,a,opaque\n0,0,1,1,0.5,1,0,0,0.5,0\n");
+  CliResult r = runOitsim("info " + t);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output.rfind("oitsim: error: " + t + ": a 65535 x 65535 frame needs at least 48.0 GiB for its per-pixel "
+                           "counts (12 B per pixel); this machine has ", 0), 0u) << r.output;
+  r = runOitsim("run --mode functional -q -t " + t + " -o " + d.file("out"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(": a 65535 x 65535 frame needs at least"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(d.file("out/report.json")));
 }
 
 }  // namespace
