@@ -39,6 +39,7 @@ struct RunArgs {
   std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
   bool width_given = false, height_given = false;
+  bool vcd_given = false;  // --vcd on the command line (an empty path is an error, not "no VCD")
   AlgorithmParams params;
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   bool quiet = false;
@@ -127,6 +128,7 @@ void checkOptions(const RunArgs& a) {
   for (float c : a.background)
     if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("--background: each channel must be in [0,1]");
   checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
+  if (a.vcd_given && a.vcd.empty()) throw std::invalid_argument("--vcd: expected a file name, got an empty path");
   checkOutputFolder("--out", a.out);
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
@@ -356,7 +358,7 @@ void addRunCommand(CLI::App& app) {
                   "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
   cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode only; the folder must exist)");
+  CLI::Option* vcd = cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode only; the folder must exist)");
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
   cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b; mlcb: coverage-mask bits")->capture_default_str();
@@ -371,8 +373,9 @@ void addRunCommand(CLI::App& app) {
   CLI::Option* height =
       cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (>= 1)");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
-  cmd->callback([a, width, height] {
+  cmd->callback([a, width, height, vcd] {
     a->command_line = commandLine();
+    a->vcd_given = vcd->count() > 0;
     a->width_given = width->count() > 0;
     a->height_given = height->count() > 0;
     runReplay(*a);

@@ -269,6 +269,10 @@ TEST_F(CliRunErrors, ZeroWidthOrHeightIsRefusedAtTheOption) {
   r = runOitsim("run --mode functional -q -t " + csv + " -o " + out + " --width 4 --height 0");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_EQ(r.output, "oitsim: error: --height 0: expected a frame height of at least 1 pixel\n");
+  // An empty --vcd is an error, not "no VCD" (it was silently ignored).
+  r = runOitsim("run -q -t " + csv + " -o " + out + " --width 4 --height 4 --vcd ''");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: --vcd: expected a file name, got an empty path\n");
   // Too large is the option's fault too, not the CSV's (as in info and convert).
   r = runOitsim("run --mode functional -q -t " + csv + " -o " + out + " --width 70000 --height 4");
   EXPECT_EQ(r.exit_code, 1) << r.output;
