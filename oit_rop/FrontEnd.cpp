@@ -108,7 +108,7 @@ void FrontEnd::refill() {
       src_.rewind();
       ++source_reads_;
       index_ = 0;
-      next_progress_ = uint64_t(1) << 20;
+      next_progress_ = kProgressRecords;
     } else {
       exhausted_ = true;
     }
@@ -174,7 +174,7 @@ void FrontEnd::refill() {
     queues_[geo_.partitionOf(tile)].push(r);
   }
   if (progress_ && index_ >= next_progress_) {
-    next_progress_ = index_ + (uint64_t(1) << 20);
+    next_progress_ = index_ + kProgressRecords;
     const uint64_t total = std::max<uint64_t>(1, src_.header().fragment_count);
     progress_((pass_ + std::min(1.0, double(index_) / double(total))) / passes_, std::string(algo_.passName(pass_)));
   }

@@ -402,6 +402,28 @@ TEST(FrameGeometry, LocalTileNumbersAreUniqueAndDensePerPartition) {
     }
 }
 
+// Progress moves within a pass (it was reported every 2^20 records: a trace
+// under a million records sat at 0 % until its pass ended; audit).
+TEST(TimingRun, ProgressMovesWithinAPass) {
+  const auto fs = smallScene(128, 128, 8, 5);  // ~70 K fragments
+  ASSERT_GT(fs.size(), 4u * 16384);
+  const auto r = runInChild([&] {
+    std::vector<double> seen;
+    TimingOptions opt;
+    opt.progress = [&](double f, const std::string&) { seen.push_back(f); };
+    TimingResult t = timed("mlab", model::testutil::layers(4), fs, 128, 128, smallConfig(), opt);
+    size_t inside = 0;  // reports strictly between the start and the end of the one pass
+    for (size_t i = 1; i < seen.size(); ++i) {
+      EXPECT_GE(seen[i], seen[i - 1]);
+      inside += seen[i] > 0.0 && seen[i] < 1.0;
+    }
+    t.stats["test_progress_inside"] = inside;
+    return t;
+  });
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_GE(r.stats["test_progress_inside"].get<size_t>(), 3u);
+}
+
 // Throughput: bench/bench_timing.cpp (speed goals live in bench/, not in tests).
 
 // The VCD's DRAM signal is the time series' dram_bytes (bytes the buses moved
