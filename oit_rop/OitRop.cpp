@@ -38,6 +38,10 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
         break;
       }
     sc_core::sc_trace(vcd_, tr_dram_bytes_, "dram_bytes_per_interval");
+    // The VCD is written as the frame runs: after the series' period doubles,
+    // its earlier samples stay at the finer period, so the period of each DRAM
+    // sample is traced beside it (bytes per cycle = bytes / interval).
+    sc_core::sc_trace(vcd_, tr_interval_, "dram_interval_cycles");
     sc_core::sc_trace(vcd_, tr_waiters_, "lock_waiters");
     for (unsigned i = 0; i < n; ++i)
       sc_core::sc_trace(vcd_, tr_occupancy_[i], fmt::format("partition{}_occupancy", i));
@@ -81,6 +85,7 @@ void OitRop::sampler() {
       s.lock_waiters += parts_[i]->lock().waiting();
     }
     tr_dram_bytes_ = s.dram_bytes;
+    tr_interval_ = interval_;
     tr_waiters_ = s.lock_waiters;
     samples_.push_back(s);
     if (samples_.size() == max_samples) {

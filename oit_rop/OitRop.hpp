@@ -50,6 +50,7 @@ class OitRop : public sc_core::sc_module {
   sc_core::sc_trace_file* vcd_ = nullptr;
   // Values the VCD traces (updated by the sampler).
   sc_dt::uint64 tr_dram_bytes_ = 0;
+  sc_dt::uint64 tr_interval_ = 0;  // the period of tr_dram_bytes_'s sample (doubles with the series)
   std::vector<unsigned> tr_occupancy_;
   unsigned tr_waiters_ = 0;
 };

@@ -474,6 +474,45 @@ TEST(TimingRun, VcdTracesKeySignals) {
   std::remove(path.c_str());
 }
 
+// When the series reaches stats.max_samples its period doubles; the VCD keeps
+// its finer earlier samples, so it traces each DRAM sample's period beside it
+// (audit: the DRAM signal doubled in scale with nothing marking it).
+TEST(TimingRun, VcdTracesThePeriodOfEachDramSample) {
+  const std::string path = ::testing::TempDir() + "oitsim_vcd_period.vcd";
+  RopConfig cfg = smallConfig();
+  cfg.stats.interval_cycles = 100;
+  cfg.stats.max_samples = 4;
+  const auto fs = smallScene(W, H, 6, 3);
+  const auto r = runInChild([&] {
+    TimingOptions opt;
+    opt.vcd_path = path;
+    return timed("mlab", model::testutil::layers(4), fs, W, H, cfg, opt);
+  });
+  ASSERT_TRUE(r.ok) << r.error;
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::istringstream lines(text);
+  std::string line, id;
+  std::vector<uint64_t> periods;  // every value the period signal takes, in order
+  while (std::getline(lines, line)) {
+    std::istringstream w(line);
+    std::string a, b, c, d, e;
+    w >> a >> b >> c >> d >> e;
+    if (a == "$var" && e == "dram_interval_cycles") id = d;
+    if (!id.empty() && !line.empty() && line[0] == 'b' && b == id) {
+      const uint64_t v = std::stoull(a.substr(1), nullptr, 2);
+      if (v != 0) periods.push_back(v);  // 0: the initial value, before the first sample
+    }
+  }
+  ASSERT_FALSE(id.empty());
+  ASSERT_GE(periods.size(), 2u);
+  EXPECT_EQ(periods.front(), 100u);
+  for (size_t i = 1; i < periods.size(); ++i) EXPECT_EQ(periods[i], 2 * periods[i - 1]);  // changes only double
+  const uint64_t final_interval = r.stats["timeseries"]["interval_cycles"].get<uint64_t>();
+  EXPECT_TRUE(periods.back() == final_interval || 2 * periods.back() == final_interval) << final_interval;
+  std::remove(path.c_str());
+}
+
 namespace {
 
 // A source whose second batch fails, as a reader does on a bad record: the
