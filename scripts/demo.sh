@@ -20,7 +20,11 @@ echo
 echo "== 2. the trace"
 "$oitsim" info "$out/demo.oitt"
 echo
-echo "== 3. replay through the SystemC ROP model: MLAB, 4 rows of the paper's 8-byte format, integrated-GPU preset"
+if [ $# -eq 0 ]; then
+  echo "== 3. replay through the SystemC ROP model: MLAB, 4 rows of the paper's 8-byte format, integrated-GPU preset"
+else  # the options given override these defaults (the summary below names what ran)
+  echo "== 3. replay through the SystemC ROP model: MLAB k=4 rgba8t8z32 on igpu, overridden by: $*"
+fi
 "$oitsim" run --trace "$out/demo.oitt" --out "$out/run" --mode timing --preset igpu \
   --algo mlab --layers 4 --format rgba8t8z32 "$@"
 echo
