@@ -11,7 +11,6 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstring>
 #include <filesystem>
 
 #include "apps/Commands.hpp"
@@ -369,9 +368,9 @@ void addRunCommand(CLI::App& app) {
       ->delimiter(',')
       ->expected(3)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  CLI::Option* width = cmd->add_option("--width", a->width, "Frame width of a CSV trace without a width comment (>= 1)");
+  CLI::Option* width = cmd->add_option("--width", a->width, "Frame width of a CSV trace without a width comment (1..65535)");
   CLI::Option* height =
-      cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (>= 1)");
+      cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (1..65535)");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
   cmd->callback([a, width, height, vcd] {
     a->command_line = commandLine();

@@ -34,6 +34,7 @@
 #include "model/OitAlgorithm.hpp"
 #include "model/StorageFormat.hpp"
 #include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/RepeatedKeys.hpp"
 #include "reports/AtomicFile.hpp"
 #include "reports/JsonReport.hpp"
 #include "traces/TempFiles.hpp"
@@ -322,37 +323,13 @@ ojson loadSpec(const std::string& path) {
     text = ss.str();
   }
   // Repeated keys, named by their path (base.mode, traces[1].gen).
-  struct Level {
-    bool object = false;
-    std::set<std::string> keys;  // objects: keys seen
-    std::string key;             // objects: the current key
-    size_t index = 0;            // arrays: elements started
-  };
-  std::vector<Level> stack;
-  auto where = [&](const std::string& key) {
-    std::string at;
-    for (size_t i = 0; i + 1 < stack.size(); ++i)
-      at += stack[i].object ? (at.empty() ? "" : ".") + stack[i].key : fmt::format("[{}]", stack[i].index - 1);
-    return at.empty() ? key : at + "." + key;
-  };
-  const ojson::parser_callback_t cb = [&](int, ojson::parse_event_t ev, ojson& parsed) {
-    using E = ojson::parse_event_t;
-    if ((ev == E::object_start || ev == E::array_start || ev == E::value) && !stack.empty() && !stack.back().object)
-      ++stack.back().index;
-    if (ev == E::object_start || ev == E::array_start) {
-      stack.push_back(Level{ev == E::object_start, {}, {}, 0});
-    } else if (ev == E::object_end || ev == E::array_end) {
-      if (!stack.empty()) stack.pop_back();
-    } else if (ev == E::key && !stack.empty() && parsed.is_string()) {
-      const std::string key = parsed.get<std::string>();
-      if (!stack.back().keys.insert(key).second)
-        throw std::invalid_argument("sweep spec " + path + ": key '" + where(key) +
+  const auto cb = rop::refuseRepeatedKeys<ojson>(
+      [&](const std::string& key) {
+        throw std::invalid_argument("sweep spec " + path + ": key '" + key +
                                     "' appears twice in the same object (the second would silently replace the "
                                     "first); give each key once");
-      stack.back().key = key;
-    }
-    return true;
-  };
+      },
+      rop::KeyPath::Dotted);
   ojson spec;
   try {
     spec = ojson::parse(text, cb);

@@ -2,6 +2,7 @@
 // so the tree and the struct cannot drift apart silently (tests/oit_rop/
 // test_config.cpp counts each section's fields against the registry).
 #include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/RepeatedKeys.hpp"
 
 #include <fmt/format.h>
 
@@ -450,37 +451,14 @@ namespace {
 nlohmann::json readConfigFile(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
-  struct Level {
-    bool object = false;
-    std::vector<std::string> keys;
-    std::string key;  // the current key (objects)
-  };
-  std::vector<Level> stack;
-  auto where = [&](const std::string& key) {
-    std::string path;
-    for (size_t i = 0; i + 1 < stack.size(); ++i)
-      if (stack[i].object) path += stack[i].key + "/";
-    return path + key;
-  };
-  const nlohmann::json::parser_callback_t cb = [&](int, nlohmann::json::parse_event_t ev, nlohmann::json& parsed) {
-    using E = nlohmann::json::parse_event_t;
-    if (ev == E::object_start || ev == E::array_start) {
-      stack.push_back(Level{ev == E::object_start, {}, {}});
-    } else if (ev == E::object_end || ev == E::array_end) {
-      if (!stack.empty()) stack.pop_back();
-    } else if (ev == E::key && !stack.empty() && parsed.is_string()) {
-      Level& top = stack.back();
-      const std::string key = parsed.get<std::string>();
-      if (std::find(top.keys.begin(), top.keys.end(), key) != top.keys.end())
+  const auto cb = refuseRepeatedKeys<nlohmann::json>(
+      [&](const std::string& key) {
         throw std::invalid_argument(fmt::format(
             "{}: key '{}' appears twice in the same JSON object (the second would silently replace the first); "
             "give each key once",
-            file, where(key)));
-      top.keys.push_back(key);
-      top.key = key;
-    }
-    return true;
-  };
+            file, key));
+      },
+      KeyPath::Slashed);
   try {
     return nlohmann::json::parse(in, cb, true, /*ignore_comments=*/true);
   } catch (const nlohmann::json::exception& e) {  // parse_error (with line, column), out_of_range.406 ...

@@ -332,7 +332,7 @@ def speed_modes(points):
         # Still a JSON object (scripts read speed.json): no group had its reference point.
         return {"rows": [], "modes": {}, "goal": goal, "goal_met": False,
                 "note": "no speed-mode group: each needs a cycle-by-cycle timing point (sim.quantum_cycles=1, "
-                        "skip.idle_cycles=false) of the same trace, algorithm, k, format and preset"}
+                        "skip.idle_cycles=false) of the same trace, algorithm, k, format and other ROP parameters"}
     # The goal: a timing mode (not functional, not the reference) within 1 % of
     # the cycle-by-cycle cycles in every group, at >= 10x its speed in every group.
     verdicts = {}
