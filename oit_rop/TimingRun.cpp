@@ -184,6 +184,15 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   for (unsigned i = 0; i < n; ++i) {
     const RopPartition& p = top->partition(i);
     PartitionResult r = p.result();
+    // Each partition's accounts cover its own cycles exactly (every cycle up to
+    // its end busy, stalled or idle); only the cycles after it finished, until
+    // the frame's end, are padded with idle. (Checked before padding: padding
+    // alone would turn cycles a stage lost into idle ones.)
+    try {
+      r.accounts.checkBalanced(r.end);
+    } catch (const std::logic_error& e) {
+      throw std::logic_error(fmt::format("partition {} (end cycle {}): {}", i, r.end, e.what()));
+    }
     r.accounts.padTo(cycles);
     r.accounts.checkBalanced(cycles);
     json stages = json::object();

@@ -242,6 +242,57 @@ TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
   expectBalanced(r.stats);
 }
 
+// Stage accounts derived by hand. One partition, one transparent fragment per
+// pixel of a 64x64 frame in raster order (N = 4096, no opaque: HiZ decides all,
+// no depth reads), input rate 2/clk, fixed shader latency Ls = 20, a 1 MiB cache
+// (every tile's line fits: only fast-clear fills, ready at the hit latency).
+// A fragment issued at cycle c: leaves the shader at c + 20, early depth at
+// c + 24 (latency 4), reaches the lock there and is admitted at once (distinct
+// pixels); the partition steps the lock before early depth, so it enters the
+// cache at c + 25, reaches the ALU at c + 25 + hit 10 = c + 35 and finishes at
+// c + 35 + base 8 + row 2 x 1 (Stored, lazy merge) = c + 45.
+// Issue: 2 per cycle in cycles 0 .. N/2 - 1.
+//  - shader_input busy while issuing or holding a fragment: cycles
+//    [0, N/2 - 1 + 20) = N/2 + 19 = 2067 (the last leaves at 2067).
+//  - blend_alu busy from the first issue to it (cycle 35) until the last
+//    completion (N/2 - 1 + 45): N/2 + 9 = 2057 cycles.
+//  - no scoreboard_full (at most ~2 x 45 = 90 of 256 entries in flight), no
+//    lock_wait, no cache_miss_wait in the cache stage.
+// Exact: every rate, latency and order above is an integer of the model.
+TEST(TimingRun, StageAccountsOfAStreamOfDistinctPixelsMatchTheHandDerivedCycles) {
+  constexpr uint32_t N = 64 * 64;
+  std::vector<Fragment> fs;
+  for (uint16_t y = 0; y < 64; ++y)
+    for (uint16_t x = 0; x < 64; ++x) fs.push_back(model::testutil::frag(x, y, 0.5f, 0, 1, 0, 0.5f));
+  RopConfig cfg = smallConfig();
+  cfg.partitions.count = 1;
+  cfg.input.latency_model = LatencyModel::Fixed;
+  cfg.input.latency_min = 20;
+  cfg.cache.size_bytes = 1u << 20;
+  ASSERT_EQ(cfg.input.fragments_per_clock, 2.0);
+  ASSERT_EQ(cfg.early_depth.latency, 4u);
+  ASSERT_EQ(cfg.cache.hit_latency, 10u);
+  ASSERT_EQ(cfg.alu.base_latency, 8u);
+  ASSERT_EQ(cfg.alu.row_latency, 2u);
+  ASSERT_EQ(cfg.alu.blends_per_clock, 2u);
+  model::AlgorithmParams p;
+  p.format = model::StorageFormat::Rgba8T8Z32;  // full ALU rate: 2 blends/clock
+  const auto r = runInChild([&] { return timed("mlab", p, fs, 64, 64, cfg); });
+  ASSERT_TRUE(r.ok) << r.error;
+  ASSERT_EQ(r.stats["cache"]["misses"].get<uint64_t>(), r.stats["cache"]["clear_fills"].get<uint64_t>());
+  const auto& st = r.stats["timing"]["stages"];
+  EXPECT_EQ(st["shader_input"]["busy"].get<uint64_t>(), N / 2 + 19);
+  EXPECT_EQ(st["shader_input"]["stalls"]["scoreboard_full"].get<uint64_t>(), 0u);
+  EXPECT_EQ(st["pixel_lock"]["stalls"]["lock_wait"].get<uint64_t>(), 0u);
+  EXPECT_EQ(st["cache"]["stalls"]["cache_miss_wait"].get<uint64_t>(), 0u);
+  EXPECT_EQ(st["blend_alu"]["busy"].get<uint64_t>(), N / 2 + 9);
+  // The transparent pass ends when the last fragment released (2047 + 45).
+  const auto& part = r.stats["timing"]["per_partition"][0];
+  EXPECT_EQ(part["opaque_end_cycle"].get<uint64_t>(), 0u);
+  EXPECT_EQ(part["pass_end_cycles"][0].get<uint64_t>(), N / 2 - 1 + 45);
+  expectBalanced(r.stats);
+}
+
 TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   // Transparent fragments only in the top-left 16x16: 4 of 64 tiles touched.
   std::vector<Fragment> fs;
