@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -38,6 +39,13 @@ inline CliResult runShell(const std::string& command) {
 }
 
 inline CliResult runOitsim(const std::string& args) { return runShell(oitsimPath() + " " + args); }
+
+// Optional Python modules: `oitsim report` draws with matplotlib (and numpy);
+// YAML sweep specs need PyYAML. Tests that need them skip, naming what is absent.
+inline bool haveMatplotlib() {
+  return std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") == 0;
+}
+inline bool haveYaml() { return std::system("/usr/bin/python3 -c 'import yaml' >/dev/null 2>&1") == 0; }
 
 inline std::string readText(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

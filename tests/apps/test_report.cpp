@@ -16,10 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool haveMatplotlib() {
-  return std::system("/usr/bin/python3 -c 'import matplotlib, numpy' >/dev/null 2>&1") == 0;
-}
-
 // One small sweep (two functional points on a 64x48 trace), run once.
 class Report : public ::testing::Test {
  protected:
@@ -183,6 +179,53 @@ TEST(ReportSpeedModes, GroupsByEveryRopParameterAndErrorsAreSigned) {
     EXPECT_NEAR(row["cycle_err_pct"].get<double>(), want, 1e-9) << cfg << " " << row["mode"];
   }
   EXPECT_EQ(sp["modes"]["timing q=200 skip=on"]["groups"].get<int>(), 2);
+}
+
+// The signed error of a speed mode, on a hand-made results set (a real sweep's
+// fast mode may land on either side of, or exactly on, its reference). Two
+// groups (cache.ways 2 and 8), each with its cycle-by-cycle reference of 1000
+// cycles: the fast mode is 3 % short in one, 2 % long in the other. Rows keep
+// the sign (reports/make_report.py: 100 (c1 - c0) / c0); the mode's
+// max_cycle_err_pct is the largest absolute value, 3.
+TEST(ReportSpeedModes, RowErrorsKeepTheirSignAndTheModeTakesTheLargestMagnitude) {
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";
+  TempDir dir("report-speed-signed");
+  nlohmann::json points = nlohmann::json::array();
+  int id = 0;
+  for (const auto& [ways, fast_cycles] : {std::pair{2, 970}, std::pair{8, 1020}})
+    for (const bool fast : {false, true}) {
+      nlohmann::json m = {{"config.mode", "timing"},
+                          {"config.algorithm", "mlab"},
+                          {"config.layers", 4},
+                          {"config.format", "rgba8t8z32"},
+                          {"config.rop.cache.ways", ways},
+                          {"config.rop.sim.quantum_cycles", fast ? 200 : 1},
+                          {"config.rop.skip.idle_cycles", fast},
+                          {"sim.wall_seconds", fast ? 0.1 : 2.0},
+                          {"timing.cycles", fast ? fast_cycles : 1000}};
+      points.push_back({{"id", std::to_string(id++)}, {"trace", "t"}, {"metrics", m}});
+    }
+  writeText(dir.file("points.json"), points.dump());
+  const CliResult r = runShell("/usr/bin/python3 -c 'import json, sys; sys.path.insert(0, sys.argv[1]); "
+                               "import make_report; json.dump(make_report.speed_modes(json.load(open(sys.argv[2]))), "
+                               "open(sys.argv[3], \"w\"))' " +
+                               std::string(OITSIM_SOURCE_DIR) + "/reports " + dir.file("points.json") + " " +
+                               dir.file("speed.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json sp = readJson(dir.file("speed.json"));
+  ASSERT_EQ(sp["rows"].size(), 4u) << sp.dump();
+  std::map<std::string, double> err;  // "ways/mode" -> cycle_err_pct
+  for (const auto& row : sp["rows"])
+    err[row["config"].get<std::string>() + "/" + row["mode"].get<std::string>()] = row["cycle_err_pct"].get<double>();
+  EXPECT_DOUBLE_EQ(err.at("mlab k=4 rgba8t8z32 cache.ways=2/timing q=200 skip=on"), -3.0);
+  EXPECT_DOUBLE_EQ(err.at("mlab k=4 rgba8t8z32 cache.ways=8/timing q=200 skip=on"), 2.0);
+  EXPECT_DOUBLE_EQ(err.at("mlab k=4 rgba8t8z32 cache.ways=2/timing q=1 skip=off"), 0.0);
+  EXPECT_DOUBLE_EQ(err.at("mlab k=4 rgba8t8z32 cache.ways=8/timing q=1 skip=off"), 0.0);
+  const auto& mode = sp["modes"]["timing q=200 skip=on"];
+  EXPECT_EQ(mode["groups"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(mode["max_cycle_err_pct"].get<double>(), 3.0);
+  EXPECT_DOUBLE_EQ(mode["min_speedup"].get<double>(), 20.0);
+  EXPECT_FALSE(mode["goal_met"].get<bool>());  // 3 % > 1 %
 }
 
 }  // namespace
