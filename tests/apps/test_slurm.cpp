@@ -44,7 +44,11 @@ std::string tail(const fs::path& path, size_t max_chars = 1500) {
   return path.string() + ":\n" + s;
 }
 
-// Two TCP ports free right now (held open together so they differ).
+// Two TCP ports free right now (held open together so they differ). They are
+// closed before the daemons bind them, so another process could take one in
+// between; then slurmctld/slurmd exit on the bind error, start() reports it
+// with the daemon's log, and the test skips (never a false pass or failure).
+// Not retried: the window is the few ms until the daemons start.
 std::pair<int, int> freePorts() {
   int fds[2] = {-1, -1}, ports[2] = {0, 0};
   for (int i = 0; i < 2; ++i) {
@@ -239,6 +243,7 @@ const char* kSpec = R"({
 })";
 
 TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it): oitsim report cannot draw";
   const auto t0 = Clock::now();
   LocalSlurm cluster;
   const std::string why = cluster.start();
@@ -294,8 +299,9 @@ TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
   ASSERT_EQ(b.size(), 4u);
   const size_t compared = compareSweepTables(a, b);
   EXPECT_GT(compared, 3u * 20u);
+  // Informational only (no wall-clock assertion: speed lives in bench/); the
+  // hang guards are the bounded waits above (daemons 5 s / 20 s, sbatch 60 s).
   const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
-  EXPECT_LT(secs, 90.0);
   std::printf("one-node Slurm sweep: %.1f s (job %s)\n", secs, job.c_str());
 }
 
