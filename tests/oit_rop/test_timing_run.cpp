@@ -536,6 +536,7 @@ TEST(TimingRun, ProgressMovesWithinAPass) {
 TEST(TimingRun, VcdTracesKeySignals) {
   const auto fs = smallScene(32, 32, 4, 2);
   const std::string path = ::testing::TempDir() + "oit_rop_trace_" + std::to_string(::getpid()) + ".vcd";
+  std::remove(path.c_str());
   TimingOptions opt;
   opt.vcd_path = path;
   RopConfig cfg = smallConfig();
@@ -543,7 +544,7 @@ TEST(TimingRun, VcdTracesKeySignals) {
   const auto r = runInChild([&] { return timed("mlab", {}, fs, 32, 32, cfg, opt); });
   ASSERT_TRUE(r.ok) << r.error;
   std::ifstream in(path);
-  EXPECT_TRUE(in.good()) << path;
+  ASSERT_TRUE(in.is_open()) << path;
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("lock_waiters"), std::string::npos);
   EXPECT_NE(text.find("partition0_occupancy"), std::string::npos);
@@ -582,7 +583,8 @@ TEST(TimingRun, VcdTracesKeySignals) {
 // its finer earlier samples, so it traces each DRAM sample's period beside it
 // (audit: the DRAM signal doubled in scale with nothing marking it).
 TEST(TimingRun, VcdTracesThePeriodOfEachDramSample) {
-  const std::string path = ::testing::TempDir() + "oitsim_vcd_period.vcd";
+  const std::string path = ::testing::TempDir() + "oitsim_vcd_period_" + std::to_string(::getpid()) + ".vcd";
+  std::remove(path.c_str());  // a stale file from an earlier run must not be read as this run's
   RopConfig cfg = smallConfig();
   cfg.stats.interval_cycles = 100;
   cfg.stats.max_samples = 4;
@@ -594,6 +596,7 @@ TEST(TimingRun, VcdTracesThePeriodOfEachDramSample) {
   });
   ASSERT_TRUE(r.ok) << r.error;
   std::ifstream in(path);
+  ASSERT_TRUE(in.is_open()) << path;
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::istringstream lines(text);
   std::string line, id;
