@@ -149,15 +149,31 @@ void checkStream(const std::string& scene, const SceneOptions& o) {
   EXPECT_EQ(prims, r.primitives);
 }
 
+// The mesh and demo scenes need glmark2-data's bunny: without it they are not
+// checked, and the test says so as a skip (after checking every other scene;
+// a failure before still fails the test) so the lost coverage shows.
+void skipScenesWithoutBunny(const std::vector<std::string>& scenes) {
+  if (scenes.empty()) return;
+  std::string names;
+  for (const auto& s : scenes) names += (names.empty() ? "" : ", ") + s;
+  ::testing::Test::RecordProperty("scenes_not_checked", names);
+  GTEST_SKIP() << "scenes " << names << " not checked: glmark2-data (bunny) absent (the other scenes were checked)";
+}
+
 TEST(SceneStreams, EveryScenePlainAndOverTheBackdropIsAValidOrderedStream) {
+  std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) continue;
+    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+      without_bunny.push_back(scene);
+      continue;
+    }
     SCOPED_TRACE(scene);
     SceneOptions o = small(160, 90);
     checkStream(scene, o);
     o.backdrop = true;
     checkStream(scene, o);
   }
+  skipScenesWithoutBunny(without_bunny);
 }
 
 struct RunStats {
@@ -173,8 +189,12 @@ RunStats generateCounted(const std::string& scene, const SceneOptions& o) {
 }
 
 TEST(SceneDeterminism, SameSeedSameStreamOtherSeedOtherStream) {
+  std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) continue;
+    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+      without_bunny.push_back(scene);
+      continue;
+    }
     SCOPED_TRACE(scene);
     SceneOptions o = small();
     o.backdrop = true;
@@ -190,6 +210,7 @@ TEST(SceneDeterminism, SameSeedSameStreamOtherSeedOtherStream) {
       EXPECT_NE(c.hash, a.hash);
     }
   }
+  skipScenesWithoutBunny(without_bunny);
 }
 
 TEST(SceneDeterminism, GeneratingTwiceFromOneGeneratorRepeatsTheStream) {
@@ -202,13 +223,18 @@ TEST(SceneDeterminism, GeneratingTwiceFromOneGeneratorRepeatsTheStream) {
 }
 
 TEST(SceneSizes, DefaultsAt1280x720GiveHalfToFourMillionFragments) {
+  std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) continue;
+    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+      without_bunny.push_back(scene);
+      continue;
+    }
     SCOPED_TRACE(scene);
     const RunStats r = generateCounted(scene, SceneOptions{});
     EXPECT_GE(r.count, 500'000u);
     EXPECT_LE(r.count, 4'000'000u);
   }
+  skipScenesWithoutBunny(without_bunny);
 }
 
 TEST(SceneSizes, CountAndDensityScaleTheElements) {
