@@ -282,22 +282,31 @@ TEST(Weighted, WboitViewSpaceWeightsNeedCamera) {
   auto w7 = [](double z) {
     return std::clamp(10.0 / (1e-5 + std::pow(z / 5, 2) + std::pow(z / 200, 6)), 1e-2, 3e3);
   };
+  auto w8 = [](double z) {
+    return std::clamp(10.0 / (1e-5 + std::pow(z / 10, 3) + std::pow(z / 200, 6)), 1e-2, 3e3);
+  };
   auto w9 = [](double z) { return std::clamp(0.03 / (1e-5 + std::pow(z / 200, 4)), 1e-2, 3e3); };
   const double R = 0.5 * 0.75 * 0.25;
-  for (int eq : {7, 9}) {
+  for (int eq : {7, 8, 9}) {
     p.weight = eq;
-    auto w = [&](double d) { return eq == 7 ? w7(zv(d)) : w9(zv(d)); };
+    auto w = [&](double d) { return eq == 7 ? w7(zv(d)) : eq == 8 ? w8(zv(d)) : w9(zv(d)); };
     // a w(z, a) = a^2 clamp(...): alphas .5, .25, .75.
     const double wr = 0.25 * w(0.2), wg = 0.0625 * w(0.8), wb = 0.5625 * w(0.5), A = wr + wg + wb;
     expectNear(renderThree("wboit", p), wr / A * (1 - R) + 0.25 * R, wg / A * (1 - R) + 0.5 * R,
                wb / A * (1 - R) + 0.75 * R, 1e-5, "wboit eq" + std::to_string(eq));
   }
-  // Camera from the trace header works too.
+  // Camera from the trace header works too: the same pixel as from the parameters.
+  p.weight = 8;
+  const auto from_params = renderThree("wboit", p);
   TraceHeader h = header(1, 1);
   h.camera = CameraPlanes{1.0f, 101.0f};
   p.camera.reset();
-  p.weight = 8;
-  EXPECT_NO_THROW(render("wboit", p, threeFragments(), 1, 1, {}, h));
+  RenderOptions opt;
+  opt.clear_colour = kBg;
+  const Rgb from_header = render("wboit", p, threeFragments(), 1, 1, opt, h).image.pixels[0];
+  EXPECT_EQ(from_header.r, from_params.r);
+  EXPECT_EQ(from_header.g, from_params.g);
+  EXPECT_EQ(from_header.b, from_params.b);
 }
 
 TEST(Outcomes, CountsPerAlgorithm) {
