@@ -87,12 +87,12 @@ TEST_F(Sweep, EveryPointRunsAndLandsInOneTable) {
     EXPECT_GT(p["metrics"]["image.metrics.rmse"].get<double>(), 0.0) << p["id"];
     EXPECT_EQ(p["metrics"]["fragments.passes.0.name"].is_string(), true);  // arrays of objects by index
   }
-  // MLAB's state is k rows of 16 bytes (fp32): 2, 4 and 8 rows per pixel.
+  // MLAB's state is k rows of 20 bytes (the default fp32 format: r, g, b, t, z
+  // as binary32, model/FORMATS.md): 2, 4 and 8 rows per pixel.
   const auto& pts = res["points"];
-  EXPECT_EQ(pts[0]["metrics"]["memory.bytes_per_pixel"].get<int>() * 2,
-            pts[1]["metrics"]["memory.bytes_per_pixel"].get<int>());
-  EXPECT_EQ(pts[1]["metrics"]["memory.bytes_per_pixel"].get<int>() * 2,
-            pts[2]["metrics"]["memory.bytes_per_pixel"].get<int>());
+  EXPECT_EQ(pts[0]["metrics"]["memory.bytes_per_pixel"].get<int>(), 2 * 20);
+  EXPECT_EQ(pts[1]["metrics"]["memory.bytes_per_pixel"].get<int>(), 4 * 20);
+  EXPECT_EQ(pts[2]["metrics"]["memory.bytes_per_pixel"].get<int>(), 8 * 20);
   // More MLAB rows on 300 overlapping particles: less error.
   EXPECT_GT(pts[0]["metrics"]["image.metrics.rmse"].get<double>(), pts[2]["metrics"]["image.metrics.rmse"].get<double>());
   // Both traces were generated into the sweep folder and replayed.

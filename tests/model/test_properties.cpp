@@ -493,7 +493,10 @@ TEST(PropertyTieRule, EveryAlgorithmTwoEqualDepthFragments) {
       // its bits, E keeps m_E & ~m_L; eq. 15 with these masks.
       {"mlcb", k2, false,
        [&](const TieFrag& e, const TieFrag& l, const Fragment& fe, const Fragment& fl) {
+         // (The masks' bits are pinned in test_mlcb.cpp; here their sizes: a b bits.)
          const uint64_t ml = detail::mlcbCoverageMask(fl, 8, 1), me = detail::mlcbCoverageMask(fe, 8, 1) & ~ml;
+         EXPECT_EQ(std::popcount(ml), int(std::lround(l.a * 8)));
+         EXPECT_EQ(std::popcount(detail::mlcbCoverageMask(fe, 8, 1)), int(std::lround(e.a * 8)));
          const double nl = std::popcount(ml), ne = std::popcount(me), rest = 8 - nl - ne;
          auto ch = [&](double cl, double ce, double g) { return (nl * cl + ne * ce + rest * g) / 8; };
          return Rgbd{ch(l.c.r, e.c.r, bg.r), ch(l.c.g, e.c.g, bg.g), ch(l.c.b, e.c.b, bg.b)};

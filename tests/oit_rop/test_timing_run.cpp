@@ -10,6 +10,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <tuple>
@@ -236,8 +237,16 @@ TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
   ASSERT_TRUE(m.ok && a.ok) << m.error << a.error;
   // MLAB paper Table 1: W x H x 8 x k for rgba8t8z32 rows.
   EXPECT_EQ(m.stats["memory"]["footprint"]["allocated"]["blend_arrays"].get<uint64_t>(), uint64_t(W) * H * 8 * 4);
-  // A-buffer: 4 B head per pixel + 12 B per stored fragment.
-  const uint64_t stored = a.stats["fragments"]["blended"];
+  // A-buffer: 4 B head per pixel + 12 B per stored fragment. The A-buffer keeps
+  // every transparent fragment in front of its pixel's final opaque depth (the
+  // nearest opaque one; a = 0 included), counted here from the scene itself.
+  std::vector<float> opaque_z(size_t(W) * H, std::numeric_limits<float>::infinity());
+  for (const Fragment& f : fs)
+    if (f.draw == model::testutil::kOpaqueDraw) opaque_z[f.y * W + f.x] = std::min(opaque_z[f.y * W + f.x], f.z);
+  uint64_t stored = 0;
+  for (const Fragment& f : fs) stored += f.draw != model::testutil::kOpaqueDraw && f.z < opaque_z[f.y * W + f.x];
+  ASSERT_GT(stored, 0u);
+  ASSERT_LT(stored, fs.size() - size_t(W) * H * 2 / 3);  // some transparent fragments are culled
   EXPECT_EQ(a.stats["memory"]["footprint"]["allocated"]["blend_arrays"].get<uint64_t>(), 4ull * W * H + 12 * stored);
   EXPECT_EQ(a.stats["memory"]["node_pool_bytes_written"].get<uint64_t>(), 12 * stored);
   EXPECT_EQ(m.stats["memory"]["footprint"]["allocated"]["depth"].get<uint64_t>(), 4ull * W * H);
