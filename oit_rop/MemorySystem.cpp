@@ -82,11 +82,12 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   map_.channel.set(cfg.channels);
   map_.row.set(cfg.row_bytes);
   map_.bank.set(cfg.banks);
+  map_.chunk_bursts.set(cfg.interleave_bytes / cfg.burst_bytes);
+  map_.row_bursts.set(cfg.row_bytes / cfg.burst_bytes);
   map_.interleave_bytes = cfg.interleave_bytes;
   map_.row_bytes = cfg.row_bytes;
   map_.multi_channel = cfg.channels > 1;
   map_.bank_hash = cfg.bank_hash;
-  map_.pow2 = map_.interleave.shift >= 0 && map_.channel.shift >= 0 && map_.row.shift >= 0 && map_.bank.shift >= 0;
 
   bus_free_.assign(cfg.channels, 0);
   busy_ticks_.assign(cfg.channels, 0);
@@ -111,29 +112,9 @@ double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
 // Inline: access() calls it once per run of bursts.
-inline MemorySystem::Run MemorySystem::AddressMap::locateRun(uint64_t addr) const {
-  // addr = [row | bank | column-high | channel | column-low(interleave)]
-  uint64_t chunk, in_chunk, local, in_row, row_line, ch, bk, rw;
-  if (pow2) {
-    // The presets: shifts and masks only.
-    chunk = addr >> interleave.shift;
-    in_chunk = addr & interleave.mask;
-    local = ((chunk >> channel.shift) << interleave.shift) + in_chunk;
-    row_line = local >> row.shift;
-    in_row = local & row.mask;
-    ch = chunk & channel.mask;
-    bk = row_line & bank.mask;
-    rw = row_line >> bank.shift;
-  } else {
-    chunk = interleave.div(addr);
-    in_chunk = interleave.mod(addr);
-    local = channel.div(chunk) * interleave_bytes + in_chunk;
-    row_line = row.div(local);
-    in_row = row.mod(local);
-    ch = channel.mod(chunk);
-    bk = bank.mod(row_line);
-    rw = bank.div(row_line);
-  }
+inline void MemorySystem::AddressMap::bankRow(uint64_t row_line, unsigned& bank_out, uint64_t& row_out) const {
+  uint64_t bk = bank.mod(row_line);
+  const uint64_t rw = bank.div(row_line);
   // Permutation interleaving (dram.bank_hash): the row's bank-sized digit
   // groups are XORed into the bank (banks a power of two; else their sum is
   // added, mod banks). For a fixed row the map stays a bijection of the banks,
@@ -149,16 +130,20 @@ inline MemorySystem::Run MemorySystem::AddressMap::locateRun(uint64_t addr) cons
       bk = bank.mod(sum);
     }
   }
-  // The location changes where the local address enters the next row, or where
-  // the next chunk goes to another channel; with one channel the local address
-  // is the address itself and only rows split it. Both distances are whole
-  // bursts (interleave and row sizes are multiples of the burst, addr is aligned).
-  uint64_t span = row_bytes - in_row;
-  if (multi_channel) span = std::min(span, interleave_bytes - in_chunk);
-  return Run{Location{static_cast<unsigned>(ch), static_cast<unsigned>(bk), rw}, burst.div(span)};
+  bank_out = static_cast<unsigned>(bk);
+  row_out = rw;
 }
 
-MemorySystem::Location MemorySystem::locate(uint64_t addr) const { return map_.locateRun(addr).loc; }
+MemorySystem::Location MemorySystem::AddressMap::locate(uint64_t addr) const {
+  // addr = [row | bank | column-high | channel | column-low(interleave)]
+  const uint64_t chunk = interleave.div(addr);
+  const uint64_t local = channel.div(chunk) * interleave_bytes + interleave.mod(addr);
+  Location loc{static_cast<unsigned>(channel.mod(chunk)), 0, 0};
+  bankRow(row.div(local), loc.bank, loc.row);
+  return loc;
+}
+
+MemorySystem::Location MemorySystem::locate(uint64_t addr) const { return map_.locate(addr); }
 
 unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).channel; }
 unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
@@ -228,9 +213,13 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   uint64_t done = arrive;
   const uint64_t first = map.burst.div(addr);
   const uint64_t last = map.burst.div(addr + bytes - 1);
-  // Books the bursts in address order, a run of bursts with one channel, bank
-  // and row at a time. Per burst the formulas of MEMORY.md apply; inside a run
-  // they reduce to a closed form, which gives the same times:
+  // A channel's chunks follow each other in its local address space, so the
+  // request's bursts on one channel are one range of local bursts. It is booked
+  // channel by channel, in address order inside a channel, a run of bursts
+  // sharing bank and row (up to the row's end) at a time: channels share no
+  // state but sums and maxima, so this gives the times of booking burst by
+  // burst in address order. Per burst the formulas of MEMORY.md apply; inside
+  // a run they reduce to a closed form, which gives the same times:
   // - open row: the first burst hits or opens the row; the others hit it and
   //   their column command issues at the same tick (row_ready, >= arrive, does
   //   not change), so each waits only for the bus, i.e. the previous burst's end;
@@ -239,68 +228,86 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   //   exceeds its channel's bus_free, so last_end is that data's end); its data
   //   then starts tRCD + CL later, after the bus is free. From the second burst
   //   on the bus never delays it, so activates are act_step apart.
-  for (uint64_t b = first; b <= last;) {
-    const Run run = map.locateRun(b * map.burst.d);
-    const unsigned ch = run.loc.channel;
-    const uint64_t n = std::min(run.bursts, last - b + 1);
-    b += n;
-    Bank& bank = bank_state[size_t(ch) * banks + run.loc.bank];
-    uint64_t column;  // tick the run's first column command (read or write) issues
-    uint64_t act = 0;  // closed row: the first burst's activate
-    if (open_row) {
-      if (bank.open_row == run.loc.row) {
-        ++hits;
-        column = std::max(arrive, bank.row_ready);
+  // (Booked per interleave chunk, a 2 KiB line on the presets was 8 runs; now 2.)
+  const uint64_t chunk_bursts = map.chunk_bursts.d, row_bursts = map.row_bursts.d, channels = map.channel.d;
+  const uint64_t k0 = map.chunk_bursts.div(first), k1 = map.chunk_bursts.div(last);  // first and last chunk
+  const uint64_t touched_channels = map.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  for (uint64_t j = 0; j < touched_channels; ++j) {
+    unsigned ch = 0;
+    uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
+    if (map.multi_channel) {
+      const uint64_t k = k0 + j;                                    // the channel's first chunk
+      const uint64_t kl = k + map.channel.div(k1 - k) * channels;   // and its last
+      ch = static_cast<unsigned>(map.channel.mod(k));
+      const uint64_t b_first = j == 0 ? first : k * chunk_bursts;
+      const uint64_t b_last = kl == k1 ? last : kl * chunk_bursts + chunk_bursts - 1;
+      lb = map.channel.div(k) * chunk_bursts + map.chunk_bursts.mod(b_first);
+      hi = map.channel.div(kl) * chunk_bursts + map.chunk_bursts.mod(b_last);
+    }
+    while (lb <= hi) {
+      const uint64_t n = std::min(hi - lb + 1, row_bursts - map.row_bursts.mod(lb));
+      unsigned bank_no;
+      uint64_t row;
+      map.bankRow(map.row_bursts.div(lb), bank_no, row);
+      lb += n;
+      Bank& bank = bank_state[size_t(ch) * banks + bank_no];
+      uint64_t column;  // tick the run's first column command (read or write) issues
+      uint64_t act = 0;  // closed row: the first burst's activate
+      if (open_row) {
+        if (bank.open_row == row) {
+          ++hits;
+          column = std::max(arrive, bank.row_ready);
+        } else {
+          ++misses;
+          // Precharge may start once the open row is active, its transfers ended
+          // and it has been open tRAS.
+          uint64_t start = std::max({arrive, bank.row_ready, bank.last_end});
+          if (bank.open_row != kNoRow) start = std::max(start, bank.act + tras) + trp;
+          bank.open_row = row;
+          bank.act = start;
+          bank.row_ready = start + trcd;
+          column = bank.row_ready;
+        }
+        hits += n - 1;
       } else {
-        ++misses;
-        // Precharge may start once the open row is active, its transfers ended
-        // and it has been open tRAS.
-        uint64_t start = std::max({arrive, bank.row_ready, bank.last_end});
-        if (bank.open_row != kNoRow) start = std::max(start, bank.act + tras) + trp;
-        bank.open_row = run.loc.row;
-        bank.act = start;
-        bank.row_ready = start + trcd;
-        column = bank.row_ready;
+        misses += n;  // every access activates its row
+        act = std::max(arrive, bank.act_ready);
+        column = act + trcd;
       }
-      hits += n - 1;
-    } else {
-      misses += n;  // every access activates its row
-      act = std::max(arrive, bank.act_ready);
-      column = act + trcd;
-    }
-    const uint64_t xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-    uint64_t last_xfer = xfer, second_xfer = 0;
-    if (open_row) {
-      last_xfer = xfer + (n - 1) * burst;
-    } else if (n > 1) {
-      const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
-      second_xfer = act1 + trcd + cl;
-      act = act1 + (n - 2) * act_step;  // the run's last activate
-      last_xfer = act + trcd + cl;
-    }
-    const uint64_t end = last_xfer + burst;
-    bus_free[ch] = end;
-    if (sample_interval_) {
-      // Usually the whole run starts in the bucket of the previous one.
-      const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
-      if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
-        stats_.bus_bytes_per_interval[last_bucket_] += n * map.burst.d;
-      } else if (open_row || n == 1) {
-        sampleBursts(xfer, n, burst);
-      } else {
-        sampleBursts(xfer, 1, 0);
-        sampleBursts(second_xfer, n - 1, act_step);
+      const uint64_t xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
+      uint64_t last_xfer = xfer, second_xfer = 0;
+      if (open_row) {
+        last_xfer = xfer + (n - 1) * burst;
+      } else if (n > 1) {
+        const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
+        second_xfer = act1 + trcd + cl;
+        act = act1 + (n - 2) * act_step;  // the run's last activate
+        last_xfer = act + trcd + cl;
       }
+      const uint64_t end = last_xfer + burst;
+      bus_free[ch] = end;
+      if (sample_interval_) {
+        // Usually the whole run starts in the bucket of the previous one.
+        const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
+        if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
+          stats_.bus_bytes_per_interval[last_bucket_] += n * map.burst.d;
+        } else if (open_row || n == 1) {
+          sampleBursts(xfer, n, burst);
+        } else {
+          sampleBursts(xfer, 1, 0);
+          sampleBursts(second_xfer, n - 1, act_step);
+        }
+      }
+      bank.last_end = std::max(bank.last_end, end);
+      if (!open_row) {
+        // Auto-precharge after the data, once the row was open tRAS.
+        bank.act = act;
+        bank.act_ready = std::max(bank.last_end, act + tras) + trp;
+      }
+      busy_ticks[ch] += n * burst;
+      channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
+      done = std::max(done, end);
     }
-    bank.last_end = std::max(bank.last_end, end);
-    if (!open_row) {
-      // Auto-precharge after the data, once the row was open tRAS.
-      bank.act = act;
-      bank.act_ready = std::max(bank.last_end, act + tras) + trp;
-    }
-    busy_ticks[ch] += n * burst;
-    channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
-    done = std::max(done, end);
   }
   stats_.row_hits += hits;
   stats_.row_misses += misses;

@@ -99,21 +99,19 @@ class MemorySystem {
     uint64_t row;
   };
   Location locate(uint64_t addr) const;
-  // Consecutive bursts from a burst-aligned address that share one location:
-  // up to the next channel (interleave chunk) or row boundary, whichever is first.
-  struct Run {
-    Location loc;
-    uint64_t bursts;
-  };
   // The address map's constants. access() works on a local copy: the compiler
   // can keep it in registers across the stores of the booking.
   struct AddressMap {
     Divisor burst, interleave, channel, row, bank;
+    // In bursts: an interleave chunk, a row (access() works on burst numbers).
+    Divisor chunk_bursts, row_bursts;
     uint64_t interleave_bytes = 0, row_bytes = 0;
-    bool multi_channel = false;  // chunk ends split runs
-    bool pow2 = false;           // interleave, channels, row and banks all powers of two
+    bool multi_channel = false;  // chunks rotate over several channels
     bool bank_hash = false;      // DramConfig::bank_hash
-    Run locateRun(uint64_t addr) const;
+    Location locate(uint64_t addr) const;
+    // Bank (hashed, dram.bank_hash) and row of a channel's row line (its local
+    // address / row_bytes); the channel is the caller's.
+    void bankRow(uint64_t row_line, unsigned& bank_out, uint64_t& row_out) const;
   };
   // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to
   // bus_bytes_per_interval (bucket of each burst's start cycle).
