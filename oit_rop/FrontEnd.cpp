@@ -86,6 +86,102 @@ void FrontEnd::wakeWaiters(unsigned partition) {
   }
 }
 
+// The per-record loop of refill(). Everything it reads or counts is held in
+// locals: algo_.insert() is an opaque virtual call, after which member fields
+// would be reloaded and member counters stored back on every record. First:
+// pass 0, which also counts per draw and the opaque, culled and stored totals.
+template <bool First>
+void FrontEnd::route(std::span<const Fragment> batch) {
+  model::OitAlgorithm& algo = algo_;
+  const unsigned pass = pass_, words = words_;
+  const bool hierarchical = hierarchical_;
+  const uint32_t width = geo_.width;
+  const uint32_t* const tile_row = geo_.tile_row.data();
+  const uint32_t* const tile_col = geo_.tile_col.data();
+  const uint8_t* const owner = geo_.owner.data();
+  const float* const hiz_min = hiz_min_.data();
+  const float* const hiz_max = hiz_max_.data();
+  uint32_t* const tile_nodes = tile_nodes_.empty() ? nullptr : tile_nodes_.data();
+  Fifo<InRec>* const queues = queues_.data();
+  uint32_t* const state = state_.data();
+  const float* const opaque_z = opaque_.depth.data();
+  std::array<uint64_t, model::kOutcomeCount> outcomes{};
+  uint64_t opaque = 0, culled = 0;
+  // Per-draw counts of the current run of one draw, added to per_draw_ when it ends.
+  uint32_t last_draw = ~0u;
+  bool last_opaque = false;
+  DrawCounts* dc = nullptr;
+  DrawCounts run{};
+  const auto flushRun = [&] {
+    if (dc) {
+      dc->fragments += run.fragments;
+      dc->culled += run.culled;
+      dc->inserted += run.inserted;
+    }
+    run = DrawCounts{};
+  };
+  model::InsertContext ctx;
+  uint32_t seq = uint32_t(index_);
+  const size_t n = batch.size();
+  const size_t pixel_bytes = size_t(words) * sizeof(uint32_t);
+  for (size_t i = 0; i < n; ++i, ++seq) {
+    // The state (tens of MB) and the opaque depth are touched in quad order:
+    // fetch the lines of a record a few iterations ahead (a hint only; the
+    // prefetched record may be opaque or culled).
+    if (i + kPrefetchAhead < n) {
+      const Fragment& a = batch[i + kPrefetchAhead];
+      const size_t ap = size_t(a.y) * width + a.x;
+      const char* line = reinterpret_cast<const char*>(state + ap * words);
+      __builtin_prefetch(line, 1);
+      if (pixel_bytes > 64) __builtin_prefetch(line + pixel_bytes - 1, 1);
+      __builtin_prefetch(opaque_z + ap);
+    }
+    const Fragment& f = batch[i];
+    if (f.draw != last_draw) {
+      last_draw = f.draw;
+      last_opaque = classes_.isOpaque(f.draw);
+      if constexpr (First) {
+        flushRun();
+        dc = last_opaque ? nullptr : &per_draw_[f.draw];
+      }
+    }
+    if (last_opaque) {
+      if constexpr (First) ++opaque;
+      continue;
+    }
+    const uint32_t pixel = uint32_t(f.y) * width + f.x;
+    const uint32_t tile = tile_row[f.y] + tile_col[f.x];
+    const float oz = opaque_z[pixel];
+    InRec r{pixel, tile, seq, 0, 0, 0};
+    if (hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
+    if (f.z >= oz) {  // at or behind the opaque surface: culled
+      r.flags |= InRec::kCulled;
+      if constexpr (First) {
+        ++culled;
+        ++run.fragments;
+        ++run.culled;
+      }
+    } else {
+      ctx.opaque_z = oz;
+      const model::InsertOutcome o = algo.insert(state + size_t(pixel) * words, f, pass, ctx);
+      r.outcome = uint8_t(o);
+      ++outcomes[size_t(o)];
+      if constexpr (First) {
+        ++run.fragments;
+        ++run.inserted;
+        if (tile_nodes && o == model::InsertOutcome::Stored) ++tile_nodes[tile];
+      }
+    }
+    queues[owner[tile]].push(r);
+  }
+  if constexpr (First) flushRun();
+  index_ += n;
+  auto& pass_outcomes = counts_.pass_outcomes[pass];
+  for (unsigned o = 0; o < model::kOutcomeCount; ++o) pass_outcomes[o] += outcomes[o];
+  counts_.opaque += opaque;
+  counts_.culled += culled;
+}
+
 void FrontEnd::refill() {
   if (exhausted_) return;
   const std::span<const Fragment> batch = src_.next();
@@ -114,65 +210,10 @@ void FrontEnd::refill() {
     }
     return;
   }
-  auto& outcomes = counts_.pass_outcomes[pass_];
-  const bool first = pass_ == 0;
-  const uint32_t width = geo_.width;
-  uint32_t last_draw = ~0u;
-  DrawCounts* dc = nullptr;
-  bool last_opaque = false;
-  model::InsertContext ctx;
-  uint32_t* const state = state_.data();
-  const float* const opaque_z = opaque_.depth.data();
-  const size_t n = batch.size();
-  const size_t pixel_bytes = size_t(words_) * sizeof(uint32_t);
-  for (size_t i = 0; i < n; ++i) {
-    // The state (tens of MB) and the opaque depth are touched in quad order:
-    // fetch the lines of a record a few iterations ahead (a hint only; the
-    // prefetched record may be opaque or culled).
-    if (i + kPrefetchAhead < n) {
-      const Fragment& a = batch[i + kPrefetchAhead];
-      const size_t ap = size_t(a.y) * width + a.x;
-      const char* line = reinterpret_cast<const char*>(state + ap * words_);
-      __builtin_prefetch(line, 1);
-      if (pixel_bytes > 64) __builtin_prefetch(line + pixel_bytes - 1, 1);
-      __builtin_prefetch(opaque_z + ap);
-    }
-    const Fragment& f = batch[i];
-    const uint32_t seq = uint32_t(index_++);
-    if (f.draw != last_draw) {
-      last_draw = f.draw;
-      last_opaque = classes_.isOpaque(f.draw);
-      dc = first && !last_opaque ? &per_draw_[f.draw] : nullptr;
-    }
-    if (last_opaque) {
-      if (first) ++counts_.opaque;
-      continue;
-    }
-    const uint32_t pixel = uint32_t(f.y) * width + f.x;
-    const uint32_t tile = geo_.tileOf(f.x, f.y);
-    const float oz = opaque_z[pixel];
-    InRec r{pixel, tile, seq, 0, 0, 0};
-    if (hierarchical_ ? !(f.z < hiz_min_[tile] || f.z >= hiz_max_[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
-    if (f.z >= oz) {  // at or behind the opaque surface: culled
-      r.flags |= InRec::kCulled;
-      if (first) {
-        ++counts_.culled;
-        ++dc->fragments;
-        ++dc->culled;
-      }
-    } else {
-      ctx.opaque_z = oz;
-      const model::InsertOutcome o = algo_.insert(state + size_t(pixel) * words_, f, pass_, ctx);
-      r.outcome = uint8_t(o);
-      ++outcomes[size_t(o)];
-      if (first) {
-        ++dc->fragments;
-        ++dc->inserted;
-        if (!tile_nodes_.empty() && o == model::InsertOutcome::Stored) ++tile_nodes_[tile];
-      }
-    }
-    queues_[geo_.partitionOf(tile)].push(r);
-  }
+  if (pass_ == 0)
+    route<true>(batch);
+  else
+    route<false>(batch);
   if (progress_ && index_ >= next_progress_) {
     next_progress_ = index_ + kProgressRecords;
     const uint64_t total = std::max<uint64_t>(1, src_.header().fragment_count);

@@ -102,6 +102,8 @@ class FrontEnd {
 
  private:
   void wakeWaiters(unsigned partition);
+  template <bool First>
+  void route(std::span<const Fragment> batch);  // refill()'s per-record loop
   FragmentSource& src_;
   model::OitAlgorithm& algo_;
   const model::DrawClassifier& classes_;
