@@ -49,30 +49,9 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, uint32_t line_bytes, ui
   miss_queue_.assign(cfg.miss_queue, 0);
 }
 
-Cycle BlendArrayCache::acquire(Cycle now, uint32_t tile, bool write) {
-  if (tile >= tiles_) throw std::out_of_range("BlendArrayCache::acquire: tile out of range");
-  const uint32_t index = line_of_[tile];
-  if (index == kInvalid) return miss(now, tile, write);
-
-  Line& line = lines_[index];
-  ++stats_.accesses;
-  ++stats_.hits;
-  line.stamp = ++stamp_;
-  ++line.pins;
-  if (write) {
-    line.dirty = true;
-    touched_[tile] = 1;
-  }
-  const Cycle hit_ready = now + cfg_.hit_latency;
-  if (line.ready > hit_ready) {
-    ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
-    return line.ready;
-  }
-  return hit_ready;
-}
-
 // Out of line: keeps the frequent hit path of acquire() small.
 Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
+  if (tile >= tiles_) throw std::out_of_range("BlendArrayCache::acquire: tile out of range");
   // A free miss-queue entry is needed (one whose line is available by now): the
   // first free one. When every entry is free (no miss in flight) that is entry 0.
   const uint32_t entries = cfg_.miss_queue;

@@ -58,7 +58,26 @@ class BlendArrayCache {
   // the tile touched. An accepted acquire pins the line: it is in use (no
   // victim) until the caller's release() of the tile, so a line is never
   // evicted while its fill is in flight or before its blend wrote it.
-  Cycle acquire(Cycle now, uint32_t tile, bool write);
+  Cycle acquire(Cycle now, uint32_t tile, bool write) {  // inline: the hit path, once per fragment
+    const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
+    if (index == kInvalid) [[unlikely]]
+      return miss(now, tile, write);  // also throws std::out_of_range for a bad tile
+    Line& line = lines_[index];
+    ++stats_.accesses;
+    ++stats_.hits;
+    line.stamp = ++stamp_;
+    ++line.pins;
+    if (write) {
+      line.dirty = true;
+      touched_[tile] = 1;
+    }
+    const Cycle hit_ready = now + cfg_.hit_latency;
+    if (line.ready > hit_ready) {
+      ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
+      return line.ready;
+    }
+    return hit_ready;
+  }
   // The use of one acquire() of `tile` ended (its blend or resolve is done).
   // Returns true when this made a line of the set of the last refusedBySet()
   // acquire free (the refused access may now be retried).
@@ -102,7 +121,7 @@ class BlendArrayCache {
     Cycle ready = 0;     // cycle the line's data is available
     uint32_t pins = 0;   // acquires of this line whose use has not ended (no victim while > 0)
   };
-  Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident
+  Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident (or out of range)
   [[noreturn]] static void releaseWithoutAcquire(uint32_t tile);  // release()'s caller bug
 
   CacheConfig cfg_;
