@@ -87,7 +87,9 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   map_.interleave_bytes = cfg.interleave_bytes;
   map_.row_bytes = cfg.row_bytes;
   map_.multi_channel = cfg.channels > 1;
-  map_.bank_hash = cfg.bank_hash;
+  map_.hash = cfg.bank_hash && cfg.banks > 1;
+  map_.pow2 = map_.burst.shift >= 0 && map_.chunk_bursts.shift >= 0 && map_.channel.shift >= 0 &&
+              map_.row_bursts.shift >= 0 && map_.bank.shift >= 0;
 
   bus_free_.assign(cfg.channels, 0);
   busy_ticks_.assign(cfg.channels, 0);
@@ -111,17 +113,19 @@ double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
-// Inline: access() calls it once per run of bursts.
-inline void MemorySystem::AddressMap::bankRow(uint64_t row_line, unsigned& bank_out, uint64_t& row_out) const {
-  uint64_t bk = bank.mod(row_line);
-  const uint64_t rw = bank.div(row_line);
+// Inline: book() calls it once per run of bursts.
+template <bool Pow2>
+inline void MemorySystem::bankRow(const Divisor& bank, bool hash, uint64_t row_line, unsigned& bank_out,
+                                  uint64_t& row_out) {
+  uint64_t bk = bank.mod<Pow2>(row_line);
+  const uint64_t rw = bank.div<Pow2>(row_line);
   // Permutation interleaving (dram.bank_hash): the row's bank-sized digit
   // groups are XORed into the bank (banks a power of two; else their sum is
   // added, mod banks). For a fixed row the map stays a bijection of the banks,
   // so a sequential stream still walks all of them, but streams whose
   // addresses differ only in high bits (one region per partition and
   // surface) stop meeting in one bank on different rows.
-  if (bank_hash && bank.d > 1) {
+  if (hash) {
     if (bank.shift > 0) {
       for (uint64_t r = rw; r != 0; r >>= bank.shift) bk ^= r & bank.mask;
     } else {
@@ -139,7 +143,7 @@ MemorySystem::Location MemorySystem::AddressMap::locate(uint64_t addr) const {
   const uint64_t chunk = interleave.div(addr);
   const uint64_t local = channel.div(chunk) * interleave_bytes + interleave.mod(addr);
   Location loc{static_cast<unsigned>(channel.mod(chunk)), 0, 0};
-  bankRow(row.div(local), loc.bank, loc.row);
+  bankRow<false>(bank, hash, row.div(local), loc.bank, loc.row);
   return loc;
 }
 
@@ -196,9 +200,17 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   const unsigned si = static_cast<unsigned>(s);
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   ++stats_.requests;
+  return map_.pow2 ? book<true>(now, addr, bytes) : book<false>(now, addr, bytes);
+}
 
-  // Local copies: the stores below could alias members, locals stay in registers.
-  const AddressMap map = map_;
+template <bool Pow2>
+Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
+  // Local copies of what the loops use: the stores below could alias members,
+  // locals stay in registers.
+  const Divisor chunk_div = map_.chunk_bursts, channel_div = map_.channel, row_div = map_.row_bursts;
+  const Divisor bank_div = map_.bank;
+  const bool multi_channel = map_.multi_channel, hash = map_.hash;
+  const uint64_t burst_bytes = map_.burst.d;
   const bool open_row = cfg_.open_row;
   const unsigned banks = cfg_.banks;
   const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, tras = tras_ticks_, burst = burst_ticks_;
@@ -211,8 +223,8 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
 
   const uint64_t arrive = (uint64_t(now) << kTickShift) + ctrl_ticks_;
   uint64_t done = arrive;
-  const uint64_t first = map.burst.div(addr);
-  const uint64_t last = map.burst.div(addr + bytes - 1);
+  const uint64_t first = map_.burst.div<Pow2>(addr);
+  const uint64_t last = map_.burst.div<Pow2>(addr + bytes - 1);
   // A channel's chunks follow each other in its local address space, so the
   // request's bursts on one channel are one range of local bursts. It is booked
   // channel by channel, in address order inside a channel, a run of bursts
@@ -229,26 +241,26 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   //   then starts tRCD + CL later, after the bus is free. From the second burst
   //   on the bus never delays it, so activates are act_step apart.
   // (Booked per interleave chunk, a 2 KiB line on the presets was 8 runs; now 2.)
-  const uint64_t chunk_bursts = map.chunk_bursts.d, row_bursts = map.row_bursts.d, channels = map.channel.d;
-  const uint64_t k0 = map.chunk_bursts.div(first), k1 = map.chunk_bursts.div(last);  // first and last chunk
-  const uint64_t touched_channels = map.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  const uint64_t chunk_bursts = chunk_div.d, row_bursts = row_div.d, channels = channel_div.d;
+  const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
+  const uint64_t touched_channels = multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
   for (uint64_t j = 0; j < touched_channels; ++j) {
     unsigned ch = 0;
     uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
-    if (map.multi_channel) {
-      const uint64_t k = k0 + j;                                    // the channel's first chunk
-      const uint64_t kl = k + map.channel.div(k1 - k) * channels;   // and its last
-      ch = static_cast<unsigned>(map.channel.mod(k));
+    if (multi_channel) {
+      const uint64_t k = k0 + j;                                       // the channel's first chunk
+      const uint64_t kl = k + channel_div.div<Pow2>(k1 - k) * channels;  // and its last
+      ch = static_cast<unsigned>(channel_div.mod<Pow2>(k));
       const uint64_t b_first = j == 0 ? first : k * chunk_bursts;
       const uint64_t b_last = kl == k1 ? last : kl * chunk_bursts + chunk_bursts - 1;
-      lb = map.channel.div(k) * chunk_bursts + map.chunk_bursts.mod(b_first);
-      hi = map.channel.div(kl) * chunk_bursts + map.chunk_bursts.mod(b_last);
+      lb = channel_div.div<Pow2>(k) * chunk_bursts + chunk_div.mod<Pow2>(b_first);
+      hi = channel_div.div<Pow2>(kl) * chunk_bursts + chunk_div.mod<Pow2>(b_last);
     }
     while (lb <= hi) {
-      const uint64_t n = std::min(hi - lb + 1, row_bursts - map.row_bursts.mod(lb));
+      const uint64_t n = std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
       uint64_t row;
-      map.bankRow(map.row_bursts.div(lb), bank_no, row);
+      bankRow<Pow2>(bank_div, hash, row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
       Bank& bank = bank_state[size_t(ch) * banks + bank_no];
       uint64_t column;  // tick the run's first column command (read or write) issues
@@ -290,7 +302,7 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
         // Usually the whole run starts in the bucket of the previous one.
         const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
         if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
-          stats_.bus_bytes_per_interval[last_bucket_] += n * map.burst.d;
+          stats_.bus_bytes_per_interval[last_bucket_] += n * burst_bytes;
         } else if (open_row || n == 1) {
           sampleBursts(xfer, n, burst);
         } else {

@@ -83,6 +83,11 @@ class MemorySystem {
     void set(uint64_t v);
     uint64_t div(uint64_t x) const { return shift >= 0 ? x >> shift : x / d; }
     uint64_t mod(uint64_t x) const { return shift >= 0 ? x & mask : x % d; }
+    // Pow2: the caller knows d is a power of two (no test per operation).
+    template <bool Pow2>
+    uint64_t div(uint64_t x) const { return Pow2 ? x >> shift : div(x); }
+    template <bool Pow2>
+    uint64_t mod(uint64_t x) const { return Pow2 ? x & mask : mod(x); }
   };
 
   struct Bank {
@@ -99,20 +104,24 @@ class MemorySystem {
     uint64_t row;
   };
   Location locate(uint64_t addr) const;
-  // The address map's constants. access() works on a local copy: the compiler
-  // can keep it in registers across the stores of the booking.
+  // The address map's constants.
   struct AddressMap {
     Divisor burst, interleave, channel, row, bank;
     // In bursts: an interleave chunk, a row (access() works on burst numbers).
     Divisor chunk_bursts, row_bursts;
     uint64_t interleave_bytes = 0, row_bytes = 0;
     bool multi_channel = false;  // chunks rotate over several channels
-    bool bank_hash = false;      // DramConfig::bank_hash
+    bool hash = false;           // DramConfig::bank_hash and more than one bank
+    bool pow2 = false;           // burst, chunk, channels, row and banks all powers of two
     Location locate(uint64_t addr) const;
-    // Bank (hashed, dram.bank_hash) and row of a channel's row line (its local
-    // address / row_bytes); the channel is the caller's.
-    void bankRow(uint64_t row_line, unsigned& bank_out, uint64_t& row_out) const;
   };
+  // Bank (hashed when `hash`, dram.bank_hash) and row of a channel's row line
+  // (its local address / row_bytes); the channel is the caller's.
+  template <bool Pow2>
+  static void bankRow(const Divisor& bank, bool hash, uint64_t row_line, unsigned& bank_out, uint64_t& row_out);
+  // access() after its checks and byte counts; Pow2 = map_.pow2.
+  template <bool Pow2>
+  Cycle book(Cycle now, uint64_t addr, uint32_t bytes);
   // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to
   // bus_bytes_per_interval (bucket of each burst's start cycle).
   void sampleBursts(uint64_t xfer, uint64_t n, uint64_t step);
