@@ -59,15 +59,14 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   uint32_t in_flight = 0;
   if (miss_queue_max_ > now) {
     slot = entries;
-    Cycle smallest = kNever;
     for (uint32_t i = entries; i-- > 0;) {  // backwards: the last free one seen is the first
       const bool busy = miss_queue_[i] > now;
       in_flight += busy;
       if (!busy) slot = i;
-      smallest = std::min(smallest, miss_queue_[i]);
     }
     if (slot == entries) {
-      miss_queue_min_ = smallest;  // exact: every entry is busy until then
+      // Exact: every entry is busy until then. (A scan of its own: refusals are rare.)
+      miss_queue_min_ = *std::min_element(miss_queue_.begin(), miss_queue_.end());
       refused_by_set_ = false;
       ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
       return kNever;
@@ -82,9 +81,12 @@ Cycle BlendArrayCache::miss(Cycle now, uint32_t tile, bool write) {
   const uint32_t set = (set_index_.empty() ? tile : set_index_[tile]) % sets_;
   const size_t first = size_t(set) * ways_;
   size_t victim_index = kInvalid;
+  uint64_t victim_stamp = ~uint64_t(0);  // stamps never reach it
   for (size_t i = first; i < first + ways_; ++i)
-    if (lines_[i].pins == 0 && (victim_index == kInvalid || lines_[i].stamp < lines_[victim_index].stamp))
+    if (lines_[i].pins == 0 && lines_[i].stamp < victim_stamp) {
       victim_index = i;
+      victim_stamp = lines_[i].stamp;
+    }
   if (victim_index == kInvalid) {
     refused_by_set_ = true;
     refused_set_ = set;
