@@ -205,16 +205,17 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
 
 template <bool Pow2>
 Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
-  // Local copies of what the loops use: the stores below could alias members,
-  // locals stay in registers.
-  const Divisor chunk_div = map_.chunk_bursts, channel_div = map_.channel, row_div = map_.row_bursts;
-  const Divisor bank_div = map_.bank;
+  // The stores below could alias members, so the compiler reloads members after
+  // them; a few scalars every run uses are copied. Copying more (the whole
+  // address map and every timing, as before) cost more per call than the
+  // reloads: most of it lands on the stack anyway.
+  const Divisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
+  const Divisor &row_div = map_.row_bursts, &bank_div = map_.bank;
   const bool multi_channel = map_.multi_channel, hash = map_.hash;
-  const uint64_t burst_bytes = map_.burst.d;
   const bool open_row = cfg_.open_row;
   const unsigned banks = cfg_.banks;
-  const uint64_t cl = cl_ticks_, trcd = trcd_ticks_, trp = trp_ticks_, tras = tras_ticks_, burst = burst_ticks_;
-  const uint64_t act_step = act_step_ticks_;
+  const uint64_t cl = cl_ticks_, burst = burst_ticks_;
+  const uint64_t &trcd = trcd_ticks_, &trp = trp_ticks_, &tras = tras_ticks_, &act_step = act_step_ticks_;
   uint64_t* const bus_free = bus_free_.data();
   uint64_t* const busy_ticks = busy_ticks_.data();
   Cycle* const channel_busy = stats_.channel_busy.data();
@@ -302,7 +303,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
         // Usually the whole run starts in the bucket of the previous one.
         const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
         if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
-          stats_.bus_bytes_per_interval[last_bucket_] += n * burst_bytes;
+          stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
         } else if (open_row || n == 1) {
           sampleBursts(xfer, n, burst);
         } else {
