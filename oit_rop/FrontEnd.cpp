@@ -89,12 +89,12 @@ void FrontEnd::wakeWaiters(unsigned partition) {
 // The per-record loop of refill(). Everything it reads or counts is held in
 // locals: algo_.insert() is an opaque virtual call, after which member fields
 // would be reloaded and member counters stored back on every record. First:
-// pass 0, which also counts per draw and the opaque, culled and stored totals.
-template <bool First>
+// pass 0, which also counts per draw and the opaque, culled and stored totals;
+// Hierarchical: early_depth.hierarchical (a test per record less).
+template <bool First, bool Hierarchical>
 void FrontEnd::route(std::span<const Fragment> batch) {
   model::OitAlgorithm& algo = algo_;
   const unsigned pass = pass_, words = words_;
-  const bool hierarchical = hierarchical_;
   const uint32_t width = geo_.width;
   const uint32_t* const tile_row = geo_.tile_row.data();
   const uint32_t* const tile_col = geo_.tile_col.data();
@@ -153,7 +153,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     const uint32_t tile = tile_row[f.y] + tile_col[f.x];
     const float oz = opaque_z[pixel];
     InRec r{pixel, tile, seq, 0, 0, 0};
-    if (hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
+    if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;
       if constexpr (First) {
@@ -211,9 +211,9 @@ void FrontEnd::refill() {
     return;
   }
   if (pass_ == 0)
-    route<true>(batch);
+    hierarchical_ ? route<true, true>(batch) : route<true, false>(batch);
   else
-    route<false>(batch);
+    hierarchical_ ? route<false, true>(batch) : route<false, false>(batch);
   if (progress_ && index_ >= next_progress_) {
     next_progress_ = index_ + kProgressRecords;
     const uint64_t total = std::max<uint64_t>(1, src_.header().fragment_count);

@@ -102,7 +102,7 @@ class FrontEnd {
 
  private:
   void wakeWaiters(unsigned partition);
-  template <bool First>
+  template <bool First, bool Hierarchical>
   void route(std::span<const Fragment> batch);  // refill()'s per-record loop
   FragmentSource& src_;
   model::OitAlgorithm& algo_;
