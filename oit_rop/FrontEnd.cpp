@@ -89,7 +89,8 @@ void FrontEnd::wakeWaiters(unsigned partition) {
 // The per-record loop of refill(). Everything it reads or counts is held in
 // locals: algo_.insert() is an opaque virtual call, after which member fields
 // would be reloaded and member counters stored back on every record. First:
-// pass 0, which also counts per draw and the opaque, culled and stored totals;
+// pass 0, which also counts per draw, the opaque and culled totals and (A-buffer)
+// the nodes stored per tile;
 // Hierarchical: early_depth.hierarchical (a test per record less).
 template <bool First, bool Hierarchical>
 void FrontEnd::route(std::span<const Fragment> batch) {
