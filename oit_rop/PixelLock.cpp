@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstdlib>
+#include <cstring>
+#include <new>
 #include <stdexcept>
 
 namespace oit::rop {
@@ -13,12 +16,6 @@ PixelLock::PixelLock(const LockConfig& cfg, uint32_t frame_width)
   free_.reserve(capacity_);
   // Lowest ids on top of the stack: token ids are deterministic.
   for (uint32_t i = capacity_; i-- > 0;) free_.push_back(i);
-  // At most `capacity` addresses are in flight: a map 4x that (load <= 1/4)
-  // keeps linear probing chains and the backward-shift erase short; 2x for
-  // huge scoreboards.
-  const size_t factor = capacity_ <= (1u << 16) ? 4 : 2;
-  map_.resize(std::max<size_t>(16, std::bit_ceil(size_t(capacity_) * factor)));
-  mask_ = map_.size() - 1;
 }
 
 uint32_t PixelLock::address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t tile_h) const {
@@ -30,21 +27,24 @@ uint32_t PixelLock::address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t ti
   return 0;
 }
 
-void PixelLock::eraseSlot(size_t i) {
-  // Backward-shift deletion keeps every probe chain intact without tombstones.
-  size_t j = i;
-  for (;;) {
-    j = (j + 1) & mask_;
-    if (map_[j].head < 0) break;
-    const size_t k = hashOf(map_[j].address) & mask_;
-    // Movable unless its home k lies cyclically in (i, j]: compared as probe
-    // distances to j, and moved by selects (which way is random: no branch).
-    const bool movable = ((j - k) & mask_) >= ((j - i) & mask_);
-    const size_t from = movable ? j : i;
-    map_[i] = map_[from];  // a self-copy when not movable
-    i = from;
+void PixelLock::grow(uint32_t address) {
+  // Power-of-two sizes: a few regrowths while the first fragments spread over
+  // the frame. calloc: the zero (empty) pages of unused addresses stay untouched.
+  const size_t n = std::max<size_t>(1024, std::bit_ceil(size_t(address) + 1));
+  auto* slots = static_cast<Slot*>(std::calloc(n, sizeof(Slot)));
+  auto* busy = cfg_.ordered ? nullptr : static_cast<uint8_t*>(std::calloc(n, 1));
+  if (!slots || (!cfg_.ordered && !busy)) {
+    std::free(slots);
+    std::free(busy);
+    throw std::bad_alloc();
   }
-  map_[i] = Slot{};
+  if (slot_count_) {
+    std::memcpy(slots, slots_.get(), slot_count_ * sizeof(Slot));
+    if (busy) std::memcpy(busy, busy_.get(), slot_count_);
+  }
+  slots_.reset(slots);
+  busy_.reset(busy);
+  slot_count_ = n;
 }
 
 }  // namespace oit::rop
