@@ -57,10 +57,12 @@ class Fifo {
 class TimingWheel {
  public:
   explicit TimingWheel(unsigned horizon)
-      : buckets_(std::bit_ceil(std::max(horizon, 2u))), used_((buckets_.size() + 63) / 64, 0) {}
+      : buckets_(std::bit_ceil(std::max(horizon, 2u))),
+        used_((buckets_.size() + 63) / 64, 0),
+        mask_(buckets_.size() - 1) {}
   unsigned horizon() const { return unsigned(buckets_.size()); }
   void schedule(Cycle due, uint32_t token) {
-    const size_t i = due & (buckets_.size() - 1);
+    const size_t i = due & mask_;
     buckets_[i].push_back(token);
     used_[i >> 6] |= uint64_t(1) << (i & 63);
     ++count_;
@@ -68,7 +70,7 @@ class TimingWheel {
   // Calls f(token) for every token due at `now`, in scheduling order.
   template <class F>
   void drain(Cycle now, F&& f) {
-    const size_t i = now & (buckets_.size() - 1);
+    const size_t i = now & mask_;
     auto& b = buckets_[i];
     if (b.empty()) return;
     for (uint32_t t : b) f(t);
@@ -82,7 +84,7 @@ class TimingWheel {
     if (count_ == 0) return kNever;
     // words is a power of two (the bucket count is, and is < 64 only when words == 1),
     // so the word index wraps with a mask (a % here was a division per call).
-    const size_t mask = buckets_.size() - 1, start = (now + 1) & mask, words = used_.size(), wmask = words - 1;
+    const size_t mask = mask_, start = (now + 1) & mask, words = used_.size(), wmask = words - 1;
     const size_t w0 = start >> 6;
     uint64_t w = used_[w0] & (~uint64_t(0) << (start & 63));
     for (size_t k = 0;; ++k) {
@@ -100,6 +102,7 @@ class TimingWheel {
  private:
   std::vector<std::vector<uint32_t>> buckets_;
   std::vector<uint64_t> used_;  // bit i: bucket i holds tokens
+  size_t mask_;                 // buckets_.size() - 1 (kept: size() of a vector of vectors divides by 24)
   size_t count_ = 0;
 };
 
