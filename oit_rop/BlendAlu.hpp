@@ -47,7 +47,7 @@ class BlendAlu {
   // Starts one blend (or a drop of a late-culled fragment: rows = 0).
   void issue(Cycle now, uint32_t token, unsigned rows, bool drop = false) {  // inline: once per fragment
     rate_.take();
-    rows = std::min<unsigned>(rows, unsigned(done_.size() - 1));
+    rows = std::min(rows, rows_max_);
     const Cycle done = now + latency(rows);
     done_[rows].push({done, token});
     next_done_ = std::min(next_done_, done);
@@ -60,7 +60,7 @@ class BlendAlu {
   // Calls f(token) for each blend finishing at `now`.
   template <class F>
   void complete(Cycle now, F&& f) {
-    if (in_flight_ == 0 || now < next_done_) return;  // nothing due (the common cycle)
+    if (now < next_done_) return;  // nothing due (the common cycle; kNever: none in flight)
     next_done_ = kNever;
     for (auto& q : done_) {
       while (!q.empty() && q.front().first <= now) {
@@ -72,7 +72,7 @@ class BlendAlu {
       if (!q.empty()) next_done_ = std::min(next_done_, q.front().first);
     }
   }
-  Cycle nextCompletion() const { return in_flight_ ? next_done_ : kNever; }
+  Cycle nextCompletion() const { return next_done_; }
   size_t inFlight() const { return in_flight_; }
   const AluStats& stats() const { return stats_; }
 
@@ -80,9 +80,10 @@ class BlendAlu {
   AluConfig cfg_;
   RateLimiter rate_;
   std::vector<Fifo<std::pair<Cycle, uint32_t>>> done_;  // index: rows
+  unsigned rows_max_;  // done_.size() - 1 (kept: size() divides by sizeof(Fifo))
   size_t in_flight_ = 0;
-  // Earliest completion in flight: each FIFO holds one latency, so its front is
-  // its earliest and the minimum over the fronts is exact.
+  // Earliest completion in flight, kNever when none: each FIFO holds one
+  // latency, so its front is its earliest and the minimum over the fronts is exact.
   Cycle next_done_ = kNever;
   AluStats stats_;
 };
