@@ -23,32 +23,31 @@ class Fifo {
     buf_.resize(std::bit_ceil(std::max<size_t>(initial, 2)));
     mask_ = buf_.size() - 1;
   }
-  bool empty() const { return size_ == 0; }
-  size_t size() const { return size_; }
+  bool empty() const { return head_ == tail_; }
+  size_t size() const { return (tail_ - head_) & mask_; }
   T& front() { return buf_[head_]; }
   const T& front() const { return buf_[head_]; }
   void push(const T& v) {
-    if (size_ > mask_) grow();
-    buf_[(head_ + size_) & mask_] = v;
-    ++size_;
+    buf_[tail_] = v;
+    tail_ = (tail_ + 1) & mask_;
+    if (tail_ == head_) grow();  // just became full: never observed full
   }
-  void pop() {
-    head_ = (head_ + 1) & mask_;
-    --size_;
-  }
-  void clear() { head_ = size_ = 0; }
+  void pop() { head_ = (head_ + 1) & mask_; }
+  void clear() { head_ = tail_ = 0; }
 
  private:
   void grow() {
-    std::vector<T> n(buf_.size() * 2);
-    for (size_t i = 0; i < size_; ++i) n[i] = buf_[(head_ + i) & mask_];
-    buf_.swap(n);
+    const size_t n = buf_.size();
+    std::vector<T> b(n * 2);
+    for (size_t i = 0; i < n; ++i) b[i] = buf_[(head_ + i) & mask_];
+    buf_.swap(b);
     head_ = 0;
+    tail_ = n;
     mask_ = buf_.size() - 1;
   }
   std::vector<T> buf_;
   size_t mask_ = 0;  // buf_.size() - 1 (a power of two minus one)
-  size_t head_ = 0, size_ = 0;
+  size_t head_ = 0, tail_ = 0;
 };
 
 // Tokens due at a future cycle, at most `horizon` - 1 cycles ahead. Every cycle
