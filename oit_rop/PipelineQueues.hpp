@@ -122,13 +122,12 @@ class RateLimiter {
     cap_ = std::max(rate_, kOne);
     credit_ = cap_;
   }
-  // Tokens that may pass at `now` (call once per cycle per stage, before take()).
+  // Tokens that may pass at `now` (call once per cycle per stage, before take();
+  // `now` never decreases). No "time advanced?" branch: dt = 0 adds nothing.
   unsigned available(Cycle now) {
-    if (now > last_) {
-      const Cycle dt = now - last_;
-      credit_ = dt >= Cycle(cap_) ? cap_ : std::min(cap_, credit_ + rate_ * int64_t(dt));
-      last_ = now;
-    }
+    const Cycle dt = now - last_;
+    credit_ = dt >= Cycle(cap_) ? cap_ : std::min(cap_, credit_ + rate_ * int64_t(dt));
+    last_ = now;
     return unsigned(uint64_t(credit_) >> kShift);  // credit_ >= 0: take() only spends what available() granted
   }
   void take() { credit_ -= kOne; }
