@@ -13,9 +13,9 @@ PixelLock::PixelLock(const LockConfig& cfg, uint32_t frame_width)
     : cfg_(cfg), capacity_(cfg.capacity), frame_width_(frame_width), ready_(64) {
   if (capacity_ == 0 || capacity_ > (1u << 24)) throw std::invalid_argument("lock.capacity must be in [1, 2^24]");
   tok_.resize(capacity_);
-  free_.reserve(capacity_);
+  free_.resize(capacity_);
   // Lowest ids on top of the stack: token ids are deterministic.
-  for (uint32_t i = capacity_; i-- > 0;) free_.push_back(i);
+  for (uint32_t i = capacity_; i-- > 0;) free_[free_count_++] = i;
 }
 
 uint32_t PixelLock::address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t tile_h) const {

@@ -48,8 +48,8 @@ class PixelLock {
   // tile_w x tile_h (the blending-array cache line).
   uint32_t address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t tile_h) const;
 
-  bool full() const { return free_.empty(); }
-  uint32_t occupancy() const { return capacity_ - uint32_t(free_.size()); }
+  bool full() const { return free_count_ == 0; }
+  uint32_t occupancy() const { return capacity_ - free_count_; }
   uint32_t capacity() const { return capacity_; }
   // Takes a free entry for a fragment issued now (submission order); returns the
   // token id (< capacity), which names the fragment until release.
@@ -96,7 +96,8 @@ class PixelLock {
   LockConfig cfg_;
   uint32_t capacity_, frame_width_;
   std::vector<Token> tok_;
-  std::vector<uint32_t> free_;
+  std::vector<uint32_t> free_;  // free token ids, a stack of free_count_ (sized to the capacity: no push_back check)
+  uint32_t free_count_ = 0;
   std::unique_ptr<Slot[], FreeDeleter> slots_;       // per address
   std::unique_ptr<uint8_t[], FreeDeleter> busy_;     // unordered: a fragment of the address is admitted or inside
   size_t slot_count_ = 0;
@@ -108,9 +109,8 @@ class PixelLock {
 // The per-fragment operations are inline: the partition calls them for every
 // fragment (allocate, arrive, enter, release).
 inline uint32_t PixelLock::allocate(uint32_t address) {
-  if (free_.empty()) throw std::logic_error("PixelLock::allocate: scoreboard full");
-  const uint32_t t = free_.back();
-  free_.pop_back();
+  if (free_count_ == 0) throw std::logic_error("PixelLock::allocate: scoreboard full");
+  const uint32_t t = free_[--free_count_];
   Token& k = tok_[t];
   k.address = address;
   k.state = State::Issued;
@@ -187,7 +187,7 @@ inline bool PixelLock::unlink(uint32_t t) {
     s.tail = uint32_t(k.prev + 1);
   k.prev = k.next = -1;
   k.state = State::Free;
-  free_.push_back(t);
+  free_[free_count_++] = t;
   return head;
 }
 
