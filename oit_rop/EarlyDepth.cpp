@@ -30,14 +30,4 @@ Cycle EarlyDepth::depthTile(Cycle now, uint32_t tile) {
   return tag_ready_[slot];
 }
 
-Cycle EarlyDepth::nextEvent(Cycle now) const {
-  if (q_.empty()) return kNever;
-  const Entry& h = q_.front();
-  // The head's status turns from busy (latency) to waiting (depth) at `passed`,
-  // and back to busy at `ready` even when the rate lets it leave only later.
-  if (h.passed > now && h.passed < h.ready) return h.passed;
-  if (h.ready > now) return h.ready;
-  return rate_.nextAvailable(now);
-}
-
 }  // namespace oit::rop

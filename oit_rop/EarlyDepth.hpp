@@ -59,7 +59,16 @@ class EarlyDepth {
     return n;
   }
   // Earliest cycle > now at which leave() can move something (kNever if empty).
-  Cycle nextEvent(Cycle now) const;
+  // (Inline: the partition asks on every cycle it may skip.)
+  Cycle nextEvent(Cycle now) const {
+    if (q_.empty()) return kNever;
+    const Entry& h = q_.front();
+    // The head's status turns from busy (latency) to waiting (depth) at `passed`,
+    // and back to busy at `ready` even when the rate lets it leave only later.
+    if (h.passed > now && h.passed < h.ready) return h.passed;
+    if (h.ready > now) return h.ready;
+    return rate_.nextAvailable(now);
+  }
   // The stage's status at `now` after leave() moved `moved` fragments.
   bool headWaitsForDepth(Cycle now) const {
     return !q_.empty() && q_.front().ready > now && q_.front().passed <= now;
