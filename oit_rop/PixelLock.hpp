@@ -185,8 +185,7 @@ inline bool PixelLock::unlink(uint32_t t) {
     tok_[size_t(k.next)].prev = k.prev;
   else
     s.tail = uint32_t(k.prev + 1);
-  k.prev = k.next = -1;
-  k.state = State::Free;
+  k.state = State::Free;  // (prev and next are dead until allocate() sets them)
   free_[free_count_++] = t;
   return head;
 }
