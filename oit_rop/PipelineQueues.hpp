@@ -36,7 +36,7 @@ class Fifo {
   void clear() { head_ = tail_ = 0; }
 
  private:
-  void grow() {
+  [[gnu::noinline, gnu::cold]] void grow() {  // out of the hot callers (rare)
     const size_t n = buf_.size();
     std::vector<T> b(n * 2);
     for (size_t i = 0; i < n; ++i) b[i] = buf_[(head_ + i) & mask_];
