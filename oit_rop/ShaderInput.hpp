@@ -28,10 +28,7 @@ class ShaderInput {
     unsigned lat = fixed_lat_;
     if (!fixed_) {
       // latencyOf() with the per-pass half of the hash computed once per pass.
-      if (pass != mix_pass_) {
-        mix_pass_ = pass;
-        pass_mix_ = mix64(cfg_.seed ^ (uint64_t(pass) << 56));
-      }
+      if (pass != mix_pass_) newPass(pass);
       lat = std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ seq))));
     }
     wheel_.schedule(now + lat, token);
@@ -73,6 +70,10 @@ class ShaderInput {
   }
   unsigned mix_pass_ = ~0u;              // pass whose hash half is in pass_mix_
   uint64_t pass_mix_ = 0;
+  [[gnu::cold, gnu::noinline]] void newPass(unsigned pass) {  // once per pass: out of the inlined issue()
+    mix_pass_ = pass;
+    pass_mix_ = mix64(cfg_.seed ^ (uint64_t(pass) << 56));
+  }
 };
 
 }  // namespace oit::rop
