@@ -13,8 +13,8 @@ EarlyDepth::EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t t
       depth_base_(depth_base),
       mem_(mem),
       tag_(std::max(1u, depth_tiles), 0),
-      tag_ready_(std::max(1u, depth_tiles), 0),
       slot_index_(std::move(slot_index)),
+      tag_ready_(std::max(1u, depth_tiles), 0),
       q_(256) {}
 
 Cycle EarlyDepth::depthTile(Cycle now, uint32_t tile) {
