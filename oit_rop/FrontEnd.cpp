@@ -13,7 +13,7 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr size_t kPrefetchAhead = 8;  // records ahead; not tuned
 }  // namespace
 
-FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
+FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p, LockGranularity lock)
     : width(w), height(h), tile_w(p.tile_width), tile_h(p.tile_height), partitions(p.count) {
   if (tile_w == 0 || tile_h == 0) throw std::invalid_argument("partitions.tile_width/tile_height must be > 0");
   if (partitions == 0 || partitions > 255) throw std::invalid_argument("partitions.count must be in [1, 255]");
@@ -31,6 +31,26 @@ FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p)
       owner[size_t(ty) * tiles_x + tx] = uint8_t((tx + ty) % partitions);
       local[size_t(ty) * tiles_x + tx] = ty * per_row + tx / partitions;  // tx = r + N j: j is unique in the row
     }
+  // A quad is 2x2 screen-aligned pixels; with even tile sizes (config: powers
+  // of two, at least 2 for quad locks) it never straddles two tiles.
+  const uint32_t qw = (tile_w + 1) / 2, qh = (tile_h + 1) / 2;
+  lock_row.resize(h);
+  lock_col.resize(w);
+  switch (lock) {
+    case LockGranularity::Pixel:
+      lock_per_tile = tile_w * tile_h;
+      for (uint32_t y = 0; y < h; ++y) lock_row[y] = (y % tile_h) * tile_w;
+      for (uint32_t x = 0; x < w; ++x) lock_col[x] = x % tile_w;
+      break;
+    case LockGranularity::Quad:
+      lock_per_tile = qw * qh;
+      for (uint32_t y = 0; y < h; ++y) lock_row[y] = (y % tile_h) / 2 * qw;
+      for (uint32_t x = 0; x < w; ++x) lock_col[x] = (x % tile_w) / 2;
+      break;
+    case LockGranularity::Tile:
+      lock_per_tile = 1;  // lock_row and lock_col stay 0
+      break;
+  }
 }
 
 FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::DrawClassifier& classes,
@@ -100,6 +120,10 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   const uint32_t* const tile_row = geo_.tile_row.data();
   const uint32_t* const tile_col = geo_.tile_col.data();
   const uint8_t* const owner = geo_.owner.data();
+  const uint32_t* const local = geo_.local.data();
+  const uint32_t* const lock_row = geo_.lock_row.data();
+  const uint32_t* const lock_col = geo_.lock_col.data();
+  const uint32_t lock_per_tile = geo_.lock_per_tile;
   const float* const hiz_min = hiz_min_.data();
   const float* const hiz_max = hiz_max_.data();
   uint32_t* const tile_nodes = tile_nodes_.empty() ? nullptr : tile_nodes_.data();
@@ -153,7 +177,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     const uint32_t pixel = uint32_t(f.y) * width + f.x;
     const uint32_t tile = tile_row[f.y] + tile_col[f.x];
     const float oz = opaque_z[pixel];
-    InRec r{pixel, tile, seq, 0, 0, 0};
+    InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], tile, seq, 0, 0, 0};
     if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;

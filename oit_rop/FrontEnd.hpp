@@ -39,20 +39,29 @@ struct FrameGeometry {
   // global number would use only some of them: a partition's tiles all share
   // one residue mod N when tiles_x = 1 mod N).
   std::vector<uint32_t> local;
+  // Lock addresses (lock.granularity: pixel, 2x2 quad or tile) numbered among
+  // the partition's own: local[tile] * lock_per_tile + lock_row[y] + lock_col[x],
+  // dense in [0, the partition's tiles x lock_per_tile). A partition's
+  // PixelLock table then holds its share of the frame, not the whole frame.
+  uint32_t lock_per_tile = 1;
+  std::vector<uint32_t> lock_row, lock_col;  // y, x -> the address's offset inside its tile
 
   FrameGeometry() = default;
-  FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p);
+  FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p, LockGranularity lock = LockGranularity::Pixel);
   uint32_t tiles() const { return tiles_x * tiles_y; }
   uint32_t tilePixels() const { return tile_w * tile_h; }
   uint32_t tileOf(uint32_t x, uint32_t y) const { return tile_row[y] + tile_col[x]; }
   uint32_t partitionOf(uint32_t tile) const { return owner[tile]; }
   uint32_t localOf(uint32_t tile) const { return local[tile]; }
+  uint32_t lockAddress(uint32_t x, uint32_t y) const {
+    return local[tileOf(x, y)] * lock_per_tile + lock_row[y] + lock_col[x];
+  }
 };
 
 // One routed fragment (16 bytes; culled and inserted fragments alike).
 struct InRec {
   enum Flags : uint8_t { kCulled = 1, kNeedsDepthRead = 2, kPassEnd = 4 };
-  uint32_t pixel;
+  uint32_t lock;    // lock address in its partition (FrameGeometry::lockAddress)
   uint32_t tile;
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;

@@ -9,22 +9,12 @@
 
 namespace oit::rop {
 
-PixelLock::PixelLock(const LockConfig& cfg, uint32_t frame_width)
-    : cfg_(cfg), capacity_(cfg.capacity), frame_width_(frame_width), ready_(64) {
+PixelLock::PixelLock(const LockConfig& cfg) : cfg_(cfg), capacity_(cfg.capacity), ready_(64) {
   if (capacity_ == 0 || capacity_ > (1u << 24)) throw std::invalid_argument("lock.capacity must be in [1, 2^24]");
   tok_.resize(capacity_);
   free_.resize(capacity_);
   // Lowest ids on top of the stack: token ids are deterministic.
   for (uint32_t i = capacity_; i-- > 0;) free_[free_count_++] = i;
-}
-
-uint32_t PixelLock::address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t tile_h) const {
-  switch (cfg_.granularity) {
-    case LockGranularity::Pixel: return y * frame_width_ + x;
-    case LockGranularity::Quad: return (y / 2) * ((frame_width_ + 1) / 2) + x / 2;
-    case LockGranularity::Tile: return (y / tile_h) * ((frame_width_ + tile_w - 1) / tile_w) + x / tile_w;
-  }
-  return 0;
 }
 
 void PixelLock::grow(uint32_t address) {

@@ -8,14 +8,16 @@
 //  - unordered: no other fragment of the address is inside (mutual exclusion);
 //               entering while an older one is still in flight is counted as
 //               an out-of-order entry.
-// The lock address is the pixel, its 2x2 quad or its tile (lock.granularity).
+// The lock address names the pixel, its 2x2 quad or its tile (lock.granularity),
+// numbered among the partition's own (FrameGeometry::lockAddress).
 // Per-address in-flight lists hang off a direct-mapped table indexed by the
 // address (8 B per address, 1 B more when unordered): no hashing, probing or
 // erase per fragment (the open-addressing hash map with backward-shift erase
 // it replaced cost 4 % more instructions of the whole timing run). The table
 // grows to cover the largest address seen (calloc: pages of addresses never
-// used are never touched); addresses are below the frame's pixel count, so
-// once the first fragments spread over the frame it no longer allocates.
+// used are never touched); addresses are dense among the partition's own
+// (FrameGeometry::lockAddress: about pixels / partitions of them), so once the
+// first fragments spread over the frame it no longer allocates.
 #pragma once
 
 #include <algorithm>
@@ -42,11 +44,7 @@ struct LockStats {
 
 class PixelLock {
  public:
-  PixelLock(const LockConfig& cfg, uint32_t frame_width);
-
-  // Lock address of pixel (x, y) under the configured granularity; tiles are
-  // tile_w x tile_h (the blending-array cache line).
-  uint32_t address(uint32_t x, uint32_t y, uint32_t tile_w, uint32_t tile_h) const;
+  explicit PixelLock(const LockConfig& cfg);
 
   bool full() const { return free_count_ == 0; }
   uint32_t occupancy() const { return capacity_ - free_count_; }
@@ -94,7 +92,7 @@ class PixelLock {
   void wakeNext(Cycle now, uint32_t address);  // the address has fragments in flight
 
   LockConfig cfg_;
-  uint32_t capacity_, frame_width_;
+  uint32_t capacity_;
   std::vector<Token> tok_;
   std::vector<uint32_t> free_;  // free token ids, a stack of free_count_ (sized to the capacity: no push_back check)
   uint32_t free_count_ = 0;

@@ -29,7 +29,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       shader_(cfg_.input),
       early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this, 16,
              geo_.local),
-      lock_(cfg_.lock, geo_.width),
+      lock_(cfg_.lock),
       cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear,
              geo_.local),
       alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
@@ -291,17 +291,12 @@ bool RopPartition::transparentStep() {
       sb_full = true;
       break;
     }
-    uint32_t addr = r.pixel;
-    if (cfg_.lock.granularity == LockGranularity::Tile)
-      addr = r.tile;
-    else if (cfg_.lock.granularity == LockGranularity::Quad)
-      addr = lock_.address(r.pixel % geo_.width, r.pixel / geo_.width, geo_.tile_w, geo_.tile_h);
-    const uint32_t t = lock_.allocate(addr);
+    const uint32_t t = lock_.allocate(r.lock);  // the partition's own lock address (FrameGeometry::lockAddress)
     const bool culled = (r.flags & InRec::kCulled) != 0;
     // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
     const uint8_t rows = culled ? 0 : rows_of_[r.outcome & 3];
     res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & merge_skip_);
-    tok_[t] = TokenInfo{r.pixel, r.tile, r.flags, r.outcome, rows};
+    tok_[t] = TokenInfo{r.tile, r.flags, r.outcome, rows};
     shader_.issue(now, t, r.seq, pass_);
     q.pop();
     front_.popped(id_);

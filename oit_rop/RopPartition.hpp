@@ -77,7 +77,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
 
  private:
   struct TokenInfo {
-    uint32_t pixel, tile;
+    uint32_t tile;
     uint8_t flags, outcome, rows;
   };
   struct CacheEntry {

@@ -122,7 +122,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   const TraceHeader& h = src.header();
   const model::DrawClassifier classes(h);
   algo.beginFrame(h);
-  const FrameGeometry geo(h.width, h.height, cfg.partitions);
+  const FrameGeometry geo(h.width, h.height, cfg.partitions, cfg.lock.granularity);
   const uint32_t line_bytes = geo.tilePixels() * algo.bytesPerPixel();  // one tile of the algorithm's arrays
   // The tile cache must hold one line: refused here, before any work, with the option to change.
   cacheGeometry(cfg.cache, line_bytes);

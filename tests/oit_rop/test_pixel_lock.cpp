@@ -31,7 +31,7 @@ std::vector<uint32_t> drainReady(PixelLock& l, Cycle now) {
 }
 
 TEST(PixelLock, OrderedAdmitsSameAddressInSubmissionOrder) {
-  PixelLock l(lockCfg(8, true), 64);
+  PixelLock l(lockCfg(8, true));
   const uint32_t t0 = l.allocate(5), t1 = l.allocate(5), t2 = l.allocate(5);
   l.arrive(1, t2);  // shaded out of order
   l.arrive(2, t1);
@@ -52,7 +52,7 @@ TEST(PixelLock, OrderedAdmitsSameAddressInSubmissionOrder) {
 }
 
 TEST(PixelLock, UnorderedIsMutualExclusionAndCountsOutOfOrderEntries) {
-  PixelLock l(lockCfg(8, false), 64);
+  PixelLock l(lockCfg(8, false));
   const uint32_t t0 = l.allocate(7), t1 = l.allocate(7), t2 = l.allocate(7);
   l.arrive(1, t2);
   EXPECT_EQ(drainReady(l, 1), std::vector<uint32_t>{t2});  // enters before older t0, t1
@@ -69,7 +69,7 @@ TEST(PixelLock, UnorderedIsMutualExclusionAndCountsOutOfOrderEntries) {
 }
 
 TEST(PixelLock, DistinctAddressesNeverWaitAndCapacityBoundsOccupancy) {
-  PixelLock l(lockCfg(4, true), 64);
+  PixelLock l(lockCfg(4, true));
   std::vector<uint32_t> t;
   for (uint32_t a = 0; a < 4; ++a) t.push_back(l.allocate(a * 977));
   EXPECT_TRUE(l.full());
@@ -82,7 +82,7 @@ TEST(PixelLock, DistinctAddressesNeverWaitAndCapacityBoundsOccupancy) {
 }
 
 TEST(PixelLock, DroppedFragmentUnblocksItsSuccessor) {
-  PixelLock l(lockCfg(4, true), 64);
+  PixelLock l(lockCfg(4, true));
   const uint32_t culled = l.allocate(3), next = l.allocate(3);
   l.arrive(4, next);
   EXPECT_FALSE(l.hasReady());
@@ -91,29 +91,12 @@ TEST(PixelLock, DroppedFragmentUnblocksItsSuccessor) {
   EXPECT_EQ(l.stats().wait_cycles, 5u);
 }
 
-TEST(PixelLock, GranularityAddresses) {
-  LockConfig c = lockCfg(4, true);
-  c.granularity = LockGranularity::Quad;
-  PixelLock quad(c, 10);
-  EXPECT_EQ(quad.address(0, 0, 8, 8), quad.address(1, 1, 8, 8));
-  EXPECT_NE(quad.address(1, 1, 8, 8), quad.address(2, 1, 8, 8));
-  EXPECT_EQ(quad.address(9, 3, 8, 8), 1u * 5 + 4);
-  c.granularity = LockGranularity::Tile;
-  PixelLock tile(c, 20);
-  EXPECT_EQ(tile.address(7, 7, 8, 8), 0u);
-  EXPECT_EQ(tile.address(8, 0, 8, 8), 1u);
-  EXPECT_EQ(tile.address(0, 8, 8, 8), 3u);  // 3 tiles per row of 20 pixels
-  c.granularity = LockGranularity::Pixel;
-  PixelLock px(c, 20);
-  EXPECT_EQ(px.address(3, 2, 8, 8), 43u);
-}
-
 // Random stall injector: random addresses, shader latencies and blend times;
 // checks the interlock's invariants every cycle.
 TEST(PixelLock, RandomTrafficKeepsInvariants) {
   for (bool ordered : {true, false}) {
     std::mt19937 rng(ordered ? 1 : 2);
-    PixelLock l(lockCfg(32, ordered), 64);
+    PixelLock l(lockCfg(32, ordered));
     std::map<uint32_t, uint32_t> addr_of;   // token -> address
     std::map<uint32_t, uint64_t> seq_of;    // token -> submission index
     std::multimap<Cycle, uint32_t> arrive_at, release_at;
