@@ -227,6 +227,37 @@ TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
   EXPECT_GT(std::abs(plain - plain_lockstep) / plain_lockstep, 0.5);  // the effect the hash removes (3x here)
 }
 
+// Per-draw totals (report.json per_draw) counted independently from the scene:
+// two transparent draws submitted interleaved (runs of one draw are short, so
+// every run boundary of the front end's per-draw counting is crossed), for a
+// one-pass and a two-pass algorithm (the counts are of the trace, not of passes).
+TEST(TimingRun, PerDrawTotalsMatchTheSceneForOneAndTwoPasses) {
+  const auto fs = smallScene(W, H, 6, 31);
+  std::vector<float> opaque_z(size_t(W) * H, std::numeric_limits<float>::infinity());
+  for (const Fragment& f : fs)
+    if (f.draw == model::testutil::kOpaqueDraw) opaque_z[f.y * W + f.x] = std::min(opaque_z[f.y * W + f.x], f.z);
+  std::map<uint32_t, std::pair<uint64_t, uint64_t>> want;  // draw -> (fragments, culled)
+  for (const Fragment& f : fs) {
+    if (f.draw == model::testutil::kOpaqueDraw) continue;
+    ++want[f.draw].first;
+    want[f.draw].second += f.z >= opaque_z[f.y * W + f.x];
+  }
+  ASSERT_EQ(want.size(), 2u);
+  for (const auto& [d, v] : want) ASSERT_GT(v.second, 0u) << "draw " << d << " has culled fragments";
+  for (const char* algo : {"mlab", "slab"}) {
+    const auto r = runInChild([&] { return timed(algo, model::AlgorithmParams{}, fs, W, H, smallConfig()); });
+    ASSERT_TRUE(r.ok) << r.error;
+    const auto& pd = r.stats["per_draw"];
+    EXPECT_EQ(pd.size(), 2u) << algo;
+    for (const auto& [d, v] : want) {
+      const auto& e = pd[std::to_string(d)];
+      EXPECT_EQ(e["fragments"].get<uint64_t>(), v.first) << algo << " draw " << d;
+      EXPECT_EQ(e["culled"].get<uint64_t>(), v.second) << algo << " draw " << d;
+      EXPECT_EQ(e["inserted"].get<uint64_t>(), v.first - v.second) << algo << " draw " << d;
+    }
+  }
+}
+
 TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
   const auto fs = smallScene(W, H, 4, 21);
   model::AlgorithmParams p;
