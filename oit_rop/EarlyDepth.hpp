@@ -25,8 +25,9 @@ struct EarlyDepthStats {
 
 class EarlyDepth {
  public:
+  static constexpr unsigned kDepthTiles = 16;  // entries of the ROP's depth-tile buffer (DESIGN.md)
   EarlyDepth(const EarlyDepthConfig& cfg, double per_clock, uint32_t tile_bytes, uint64_t depth_base,
-             MemoryPort& mem, unsigned depth_tiles = 16, std::vector<uint32_t> slot_index = {});
+             MemoryPort& mem, unsigned depth_tiles = kDepthTiles, std::vector<uint32_t> slot_index = {});
   // slot_index (optional, one per tile): the depth-tile buffer is direct mapped
   // by slot_index[tile] % depth_tiles (a partition passes its local tile
   // numbers, FrameGeometry::local); without it, by the tile number.

@@ -27,7 +27,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       clock_(cfg_.clock.core_mhz),
       quantum_(std::max<Cycle>(1, cfg_.sim.quantum_cycles)),
       shader_(cfg_.input),
-      early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this, 16,
+      early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this, EarlyDepth::kDepthTiles,
              geo_.local),
       lock_(cfg_.lock),
       cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear,
