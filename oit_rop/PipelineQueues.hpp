@@ -122,12 +122,13 @@ class RateLimiter {
     cap_ = std::max(rate_, kOne);
     credit_ = cap_;
   }
-  // Tokens that may pass at `now` (call once per cycle per stage, before take();
-  // `now` never decreases). No "time advanced?" branch: dt = 0 adds nothing.
+  // Tokens that may pass at `now` (call once per cycle per stage, before take()).
+  // No "time advanced?" branch (selects instead): dt = 0 adds nothing, and an
+  // earlier `now` than the last call's (no caller does that) adds nothing either.
   unsigned available(Cycle now) {
-    const Cycle dt = now - last_;
+    const Cycle dt = now > last_ ? now - last_ : 0;
     credit_ = dt >= Cycle(cap_) ? cap_ : std::min(cap_, credit_ + rate_ * int64_t(dt));
-    last_ = now;
+    last_ = now > last_ ? now : last_;
     return unsigned(uint64_t(credit_) >> kShift);  // credit_ >= 0: take() only spends what available() granted
   }
   void take() { credit_ -= kOne; }

@@ -47,6 +47,14 @@ TEST(PipelineQueues, RateLimiterIsExactForFractionalRatesWhateverTheSkips) {
   EXPECT_EQ(s.available(4), 1u);
   RateLimiter two(2.0);
   EXPECT_EQ(two.available(0), 2u);
+  // Asked about an earlier cycle than before, it grants nothing new (the
+  // unsigned cycle difference must not wrap into a full bucket).
+  RateLimiter q(0.25);
+  q.available(10);
+  q.take();
+  EXPECT_EQ(q.available(9), 0u);
+  EXPECT_EQ(q.available(13), 0u);
+  EXPECT_EQ(q.available(14), 1u);
 }
 
 // Slow rates are kept to 2^-20 per clock: 0.001 and 0.01 per clock pass 1 +
