@@ -39,9 +39,14 @@ TEST(PipelineQueues, RateLimiterIsExactForFractionalRatesWhateverTheSkips) {
   for (Cycle c = 0; c < 100; ++c)
     while (r.available(c) > 0) r.take(), ++taken;
   EXPECT_EQ(taken, 25u);  // 1 at cycle 0 (full bucket) + one per 4 cycles
-  RateLimiter s(0.25);
-  s.available(0);
-  s.take();
+  // A quarter-rate limiter whose full bucket was spent at cycle `at`.
+  const auto spentAt = [](Cycle at) {
+    RateLimiter l(0.25);
+    l.available(at);
+    l.take();
+    return l;
+  };
+  RateLimiter s = spentAt(0);
   EXPECT_EQ(s.nextAvailable(0), 4u);
   EXPECT_EQ(s.available(3), 0u);
   EXPECT_EQ(s.available(4), 1u);
@@ -49,9 +54,7 @@ TEST(PipelineQueues, RateLimiterIsExactForFractionalRatesWhateverTheSkips) {
   EXPECT_EQ(two.available(0), 2u);
   // Asked about an earlier cycle than before, it grants nothing new (the
   // unsigned cycle difference must not wrap into a full bucket).
-  RateLimiter q(0.25);
-  q.available(10);
-  q.take();
+  RateLimiter q = spentAt(10);
   EXPECT_EQ(q.available(9), 0u);
   EXPECT_EQ(q.available(13), 0u);
   EXPECT_EQ(q.available(14), 1u);
