@@ -84,8 +84,6 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   map_.bank.set(cfg.banks);
   map_.chunk_bursts.set(cfg.interleave_bytes / cfg.burst_bytes);
   map_.row_bursts.set(cfg.row_bytes / cfg.burst_bytes);
-  map_.interleave_bytes = cfg.interleave_bytes;
-  map_.row_bytes = cfg.row_bytes;
   map_.multi_channel = cfg.channels > 1;
   map_.hash = cfg.bank_hash && cfg.banks > 1;
   map_.pow2 = map_.burst.shift >= 0 && map_.chunk_bursts.shift >= 0 && map_.channel.shift >= 0 &&
@@ -141,7 +139,7 @@ inline void MemorySystem::bankRow(const Divisor& bank, bool hash, uint64_t row_l
 MemorySystem::Location MemorySystem::AddressMap::locate(uint64_t addr) const {
   // addr = [row | bank | column-high | channel | column-low(interleave)]
   const uint64_t chunk = interleave.div(addr);
-  const uint64_t local = channel.div(chunk) * interleave_bytes + interleave.mod(addr);
+  const uint64_t local = channel.div(chunk) * interleave.d + interleave.mod(addr);
   Location loc{static_cast<unsigned>(channel.mod(chunk)), 0, 0};
   bankRow<false>(bank, hash, row.div(local), loc.bank, loc.row);
   return loc;

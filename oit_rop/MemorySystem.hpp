@@ -109,7 +109,6 @@ class MemorySystem {
     Divisor burst, interleave, channel, row, bank;
     // In bursts: an interleave chunk, a row (access() works on burst numbers).
     Divisor chunk_bursts, row_bursts;
-    uint64_t interleave_bytes = 0, row_bytes = 0;
     bool multi_channel = false;  // chunks rotate over several channels
     bool hash = false;           // DramConfig::bank_hash and more than one bank
     bool pow2 = false;           // burst, chunk, channels, row and banks all powers of two
