@@ -159,6 +159,9 @@ const std::vector<Property>& registry() {
                   "interlock scope: one pixel, a 2x2 quad or a whole screen tile"),
       boolean("lock.ordered", &R::lock, &LockConfig::ordered,
               "admit overlapping fragments in submission order (ROV); false = unordered interlock"),
+      boolean("lock.per_primitive", &R::lock, &LockConfig::per_primitive,
+              "quad/tile granularity: the fragments of one primitive take the lock together (they never overlap "
+              "each other); false = each waits for every older fragment of its quad/tile (an upper bound)"),
       enumeration("lock.release", &R::lock, &LockConfig::release, {"end_of_blend", "end_of_shader"},
                   "release at the end of the critical section, or of the shader (INTEL ordering)"),
       integer("lock.shader_tail", &R::lock, &LockConfig::shader_tail, 0, 1000000, "cycles",

@@ -147,6 +147,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   };
   model::InsertContext ctx;
   uint32_t seq = uint32_t(index_);
+  uint32_t run_draw = run_draw_, run_prim = run_prim_, run_start = run_start_;
   const size_t n = batch.size();
   const size_t pixel_bytes = size_t(words) * sizeof(uint32_t);
   for (size_t i = 0; i < n; ++i, ++seq) {
@@ -177,7 +178,12 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     const uint32_t pixel = uint32_t(f.y) * width + f.x;
     const uint32_t tile = tile_row[f.y] + tile_col[f.x];
     const float oz = opaque_z[pixel];
-    InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], tile, seq, 0, 0, 0};
+    if ((f.prim != run_prim) | (f.draw != run_draw) | (seq - run_start > 0xFFFF)) {
+      run_draw = f.draw;
+      run_prim = f.prim;
+      run_start = seq;
+    }
+    InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], tile, seq, 0, 0, uint16_t(seq - run_start)};
     if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;
@@ -200,6 +206,9 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     queues[owner[tile]].push(r);
   }
   if constexpr (First) flushRun();
+  run_draw_ = run_draw;
+  run_prim_ = run_prim;
+  run_start_ = run_start;
   index_ += n;
   auto& pass_outcomes = counts_.pass_outcomes[pass];
   for (unsigned o = 0; o < model::kOutcomeCount; ++o) pass_outcomes[o] += outcomes[o];
@@ -229,6 +238,7 @@ void FrontEnd::refill() {
       src_.rewind();
       ++source_reads_;
       index_ = 0;
+      run_draw_ = run_prim_ = ~0u;  // seq starts again: no run carries over
       next_progress_ = kProgressRecords;
     } else {
       exhausted_ = true;

@@ -65,8 +65,8 @@ struct InRec {
   uint32_t tile;
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;
-  uint8_t outcome;  // model::InsertOutcome
-  uint16_t pad;
+  uint8_t outcome;       // model::InsertOutcome
+  uint16_t prim_offset;  // seq - first seq of its primitive's run (a run restarts every 65536 records)
 };
 
 struct DrawCounts {
@@ -122,6 +122,9 @@ class FrontEnd {
   unsigned words_, passes_, pass_ = 0;
   bool exhausted_ = false;
   uint64_t index_ = 0, source_reads_ = 0;
+  // The current primitive run (consecutive transparent records of one draw and
+  // primitive): InRec::prim_offset, PixelLock's owner with lock.per_primitive.
+  uint32_t run_draw_ = ~0u, run_prim_ = ~0u, run_start_ = 0;
   model::StateBuffer state_;  // uninitialised until clearFrame, huge pages
   std::vector<Fifo<InRec>> queues_;
   std::vector<float> hiz_min_, hiz_max_;

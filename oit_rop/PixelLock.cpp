@@ -15,6 +15,7 @@ PixelLock::PixelLock(const LockConfig& cfg) : cfg_(cfg), capacity_(cfg.capacity)
   free_.resize(capacity_);
   // Lowest ids on top of the stack: token ids are deterministic.
   for (uint32_t i = capacity_; i-- > 0;) free_[free_count_++] = i;
+  grouped_ = cfg.per_primitive && cfg.granularity != LockGranularity::Pixel;
 }
 
 void PixelLock::grow(uint32_t address) {
@@ -22,7 +23,7 @@ void PixelLock::grow(uint32_t address) {
   // the frame. calloc: the zero (empty) pages of unused addresses stay untouched.
   const size_t n = std::max<size_t>(1024, std::bit_ceil(size_t(address) + 1));
   auto* slots = static_cast<Slot*>(std::calloc(n, sizeof(Slot)));
-  auto* busy = cfg_.ordered ? nullptr : static_cast<uint8_t*>(std::calloc(n, 1));
+  auto* busy = cfg_.ordered ? nullptr : static_cast<Busy*>(std::calloc(n, sizeof(Busy)));
   if (!slots || (!cfg_.ordered && !busy)) {
     std::free(slots);
     std::free(busy);
@@ -30,7 +31,7 @@ void PixelLock::grow(uint32_t address) {
   }
   if (slot_count_) {
     std::memcpy(slots, slots_.get(), slot_count_ * sizeof(Slot));
-    if (busy) std::memcpy(busy, busy_.get(), slot_count_);
+    if (busy) std::memcpy(busy, busy_.get(), slot_count_ * sizeof(Busy));
   }
   slots_.reset(slots);
   busy_.reset(busy);

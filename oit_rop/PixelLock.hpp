@@ -10,8 +10,14 @@
 //               an out-of-order entry.
 // The lock address names the pixel, its 2x2 quad or its tile (lock.granularity),
 // numbered among the partition's own (FrameGeometry::lockAddress).
+// Every fragment has an owner: at quad or tile granularity with
+// lock.per_primitive, the first trace index of its primitive's run (the
+// fragments of one primitive cover each pixel once, never overlap each other,
+// and hardware shades a primitive's quad as one unit), so they hold the lock
+// together: "older fragment of the address" above reads "older fragment of
+// the address and of another owner". Otherwise every fragment owns itself.
 // Per-address in-flight lists hang off a direct-mapped table indexed by the
-// address (8 B per address, 1 B more when unordered): no hashing, probing or
+// address (8 B per address, 8 B more when unordered): no hashing, probing or
 // erase per fragment (the open-addressing hash map with backward-shift erase
 // it replaced cost 4 % more instructions of the whole timing run). The table
 // grows to cover the largest address seen (calloc: pages of addresses never
@@ -50,8 +56,11 @@ class PixelLock {
   uint32_t occupancy() const { return capacity_ - free_count_; }
   uint32_t capacity() const { return capacity_; }
   // Takes a free entry for a fragment issued now (submission order); returns the
-  // token id (< capacity), which names the fragment until release.
-  uint32_t allocate(uint32_t address);
+  // token id (< capacity), which names the fragment until release. `owner`:
+  // the first trace index of the fragment's primitive run (used when grouped()).
+  uint32_t allocate(uint32_t address, uint32_t owner);
+  // Fragments of one owner share the lock (quad/tile granularity, per_primitive).
+  bool grouped() const { return grouped_; }
   // The fragment reached the lock (after the shader and early depth).
   void arrive(Cycle now, uint32_t token);
   // The fragment leaves without entering (culled by early depth).
@@ -72,24 +81,30 @@ class PixelLock {
   struct Token {
     uint32_t address = 0;
     int32_t prev = -1, next = -1;  // same-address list, oldest first
+    uint32_t owner = 0;            // primitive run (grouped) or the token's own id
     Cycle arrived = 0;
     State state = State::Free;
+    bool front = false;  // every older fragment of the address in flight has this owner
   };
   // An address's in-flight list; all-zero = no fragment of the address in
   // flight (so a calloc'd table starts empty).
   struct Slot {
     uint32_t head = 0, tail = 0;  // oldest / newest token + 1 (0 = none)
   };
+  // Unordered interlock: fragments of the address admitted or inside, all of one owner.
+  struct Busy {
+    uint32_t count = 0, owner = 0;
+  };
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
   // Makes the table cover `address` (cold: only when a larger address appears).
   void grow(uint32_t address);
-  // Removes the token from its address list; returns whether it was the head
-  // (the address's oldest fragment in flight).
-  bool unlink(uint32_t token);
+  // Removes the token from its address list and marks the fragments that are
+  // now at the front of their address (ordered: admits those that wait).
+  void unlink(Cycle now, uint32_t token);
   void admit(Cycle now, uint32_t token);
-  void wakeNext(Cycle now, uint32_t address);  // the address has fragments in flight
+  void wakeUnordered(Cycle now, uint32_t address);  // the address's last admitted fragment left
 
   LockConfig cfg_;
   uint32_t capacity_;
@@ -97,29 +112,35 @@ class PixelLock {
   std::vector<uint32_t> free_;  // free token ids, a stack of free_count_ (sized to the capacity: no push_back check)
   uint32_t free_count_ = 0;
   std::unique_ptr<Slot[], FreeDeleter> slots_;       // per address
-  std::unique_ptr<uint8_t[], FreeDeleter> busy_;     // unordered: a fragment of the address is admitted or inside
+  std::unique_ptr<Busy[], FreeDeleter> busy_;        // unordered, per address
   size_t slot_count_ = 0;
   Fifo<uint32_t> ready_;
   uint32_t waiting_ = 0;
+  bool grouped_ = false;
   LockStats stats_;
 };
 
 // The per-fragment operations are inline: the partition calls them for every
 // fragment (allocate, arrive, enter, release).
-inline uint32_t PixelLock::allocate(uint32_t address) {
+inline uint32_t PixelLock::allocate(uint32_t address, uint32_t owner) {
   if (free_count_ == 0) throw std::logic_error("PixelLock::allocate: scoreboard full");
   const uint32_t t = free_[--free_count_];
   Token& k = tok_[t];
   k.address = address;
+  k.owner = grouped_ ? owner : t;  // token ids are distinct among the fragments in flight
   k.state = State::Issued;
   k.next = -1;
   if (address >= slot_count_) grow(address);
   Slot& s = slots_[address];
   k.prev = int32_t(s.tail) - 1;
-  if (s.tail)
-    tok_[s.tail - 1].next = int32_t(t);
-  else
+  if (s.tail) {
+    Token& p = tok_[s.tail - 1];
+    p.next = int32_t(t);
+    k.front = p.front & (p.owner == k.owner);
+  } else {
     s.head = t + 1;
+    k.front = true;
+  }
   s.tail = t + 1;
   stats_.peak_occupancy = std::max(stats_.peak_occupancy, occupancy());
   return t;
@@ -141,15 +162,18 @@ inline void PixelLock::arrive(Cycle now, uint32_t t) {
   Token& k = tok_[t];
   ++stats_.arrivals;
   k.arrived = now;
-  // Ordered: the head of the address's list is the token with no older one
-  // (prev < 0), so no map lookup is needed.
+  // Ordered: eligible when every older fragment of the address in flight has
+  // its owner (front: no lookup needed).
   bool eligible;
   if (cfg_.ordered) {
-    eligible = k.prev < 0;
+    eligible = k.front;
   } else {
-    uint8_t& busy = busy_[k.address];
-    eligible = !busy;
-    busy = 1;
+    Busy& b = busy_[k.address];
+    eligible = b.count == 0 || b.owner == k.owner;
+    if (eligible) {
+      ++b.count;
+      b.owner = k.owner;
+    }
   }
   if (eligible) {
     admit(now, t);
@@ -167,60 +191,62 @@ inline void PixelLock::enterFront(Cycle now) {
   Token& k = tok_[t];
   k.state = State::Inside;
   ++stats_.entries;
-  // Unordered interlock: an older fragment of this address is still in flight.
-  if (k.prev >= 0) ++stats_.out_of_order_entries;
+  // Unordered interlock: an older fragment of another owner is still in flight.
+  if (!k.front) ++stats_.out_of_order_entries;
 }
 
-inline bool PixelLock::unlink(uint32_t t) {
+inline void PixelLock::unlink(Cycle now, uint32_t t) {
   Token& k = tok_[t];
   Slot& s = slots_[k.address];
-  const bool head = k.prev < 0;
-  if (!head)
-    tok_[size_t(k.prev)].next = k.next;
+  const int32_t p = k.prev, n = k.next;
+  if (p >= 0)
+    tok_[size_t(p)].next = n;
   else
-    s.head = uint32_t(k.next + 1);
-  if (k.next >= 0)
-    tok_[size_t(k.next)].prev = k.prev;
+    s.head = uint32_t(n + 1);
+  if (n >= 0)
+    tok_[size_t(n)].prev = p;
   else
-    s.tail = uint32_t(k.prev + 1);
+    s.tail = uint32_t(p + 1);
   k.state = State::Free;  // (prev and next are dead until allocate() sets them)
   free_[free_count_++] = t;
-  return head;
+  // The next fragment and the rest of its owner's run reach the front when
+  // nothing of another owner is older any more (p < 0: it is the head now; or
+  // t stood between two fragments of one owner, the older at the front).
+  if (n < 0 || tok_[size_t(n)].front) return;
+  const uint32_t o = tok_[size_t(n)].owner;
+  if (p >= 0 && !(tok_[size_t(p)].front & (tok_[size_t(p)].owner == o))) return;
+  for (int32_t i = n; i >= 0 && tok_[size_t(i)].owner == o; i = tok_[size_t(i)].next) {
+    Token& f = tok_[size_t(i)];
+    f.front = true;
+    if (cfg_.ordered && f.state == State::Waiting) admit(now, uint32_t(i));
+  }
 }
 
-inline void PixelLock::wakeNext(Cycle now, uint32_t a) {
-  const Slot& s = slots_[a];
-  if (cfg_.ordered) {
-    const uint32_t h = s.head - 1;
-    if (tok_[h].state == State::Waiting) admit(now, h);
-    return;
-  }
-  if (busy_[a]) return;
-  for (int32_t i = int32_t(s.head) - 1; i >= 0; i = tok_[size_t(i)].next)
-    if (tok_[size_t(i)].state == State::Waiting) {
-      busy_[a] = 1;
+inline void PixelLock::wakeUnordered(Cycle now, uint32_t a) {
+  // The oldest waiting fragment gets the address, with every other waiting
+  // fragment of its owner.
+  Busy& b = busy_[a];
+  int32_t i = int32_t(slots_[a].head) - 1;
+  while (i >= 0 && tok_[size_t(i)].state != State::Waiting) i = tok_[size_t(i)].next;
+  if (i < 0) return;
+  b.owner = tok_[size_t(i)].owner;
+  for (; i >= 0; i = tok_[size_t(i)].next)
+    if (tok_[size_t(i)].state == State::Waiting && tok_[size_t(i)].owner == b.owner) {
+      ++b.count;
       admit(now, uint32_t(i));
-      return;
     }
 }
 
 inline void PixelLock::drop(Cycle now, uint32_t t) {
-  const uint32_t a = tok_[t].address;
-  const bool was_head = unlink(t);
   // Ordered: the dropped fragment may have been the one blocking the next.
-  // (Only a dropped head unblocks anyone: a head is never left waiting.)
-  if (cfg_.ordered && was_head && slots_[a].head) wakeNext(now, a);
+  unlink(now, t);
 }
 
 inline void PixelLock::release(Cycle now, uint32_t t) {
   const uint32_t a = tok_[t].address;
-  const bool was_head = unlink(t);
-  // Unordered: the released fragment (wherever it sits in its list) frees the
-  // address. Ordered: only the head holds the lock (a fragment enters only as
-  // its address's oldest in flight and stays the head until it leaves).
-  if (!cfg_.ordered) busy_[a] = 0;
-  else if (!was_head) return;
-  if (slots_[a].head) wakeNext(now, a);
+  unlink(now, t);
+  // Unordered: the last admitted fragment of the address frees it.
+  if (!cfg_.ordered && --busy_[a].count == 0 && slots_[a].head) wakeUnordered(now, a);
 }
 
 }  // namespace oit::rop

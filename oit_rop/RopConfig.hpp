@@ -45,6 +45,7 @@ struct LockConfig {
   unsigned capacity = 256;                // scoreboard entries (fragments in flight between issue and release)
   LockGranularity granularity = LockGranularity::Pixel;
   bool ordered = true;                    // admit in submission order per lock address
+  bool per_primitive = true;              // quad/tile: one primitive's fragments hold the lock together
   LockRelease release = LockRelease::EndOfBlend;
   unsigned shader_tail = 20;              // cycles from end of blend to end of shader (EndOfShader release)
   bool operator==(const LockConfig&) const = default;

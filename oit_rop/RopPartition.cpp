@@ -291,7 +291,8 @@ bool RopPartition::transparentStep() {
       sb_full = true;
       break;
     }
-    const uint32_t t = lock_.allocate(r.lock);  // the partition's own lock address (FrameGeometry::lockAddress)
+    // The partition's own lock address (FrameGeometry::lockAddress); owner: the primitive run's first record.
+    const uint32_t t = lock_.allocate(r.lock, r.seq - r.prim_offset);
     const bool culled = (r.flags & InRec::kCulled) != 0;
     // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
     const uint8_t rows = culled ? 0 : rows_of_[r.outcome & 3];

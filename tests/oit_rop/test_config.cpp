@@ -77,7 +77,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 14u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 47u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 48u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -101,6 +101,8 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_EQ(get("input.fragments_per_clock").unit, "fragments/clock");
   EXPECT_EQ(get("lock.granularity").type, PropertyType::Enum);
   EXPECT_EQ(get("lock.granularity").allowed, "pixel | quad | tile");
+  EXPECT_EQ(get("lock.per_primitive").allowed, "true | false");
+  EXPECT_EQ(get("lock.per_primitive").value, "true");
   EXPECT_EQ(get("partitions.tile_width").allowed, "[1, 64], power of two");
   EXPECT_EQ(get("alu.fp16_rate").allowed, "[0.001, 1]");
   EXPECT_NE(get("alu.fp16_rate").description.find("[inferred]"), std::string::npos);

@@ -14,10 +14,12 @@ using namespace oit::rop;
 
 namespace {
 
-LockConfig lockCfg(unsigned cap, bool ordered) {
+LockConfig lockCfg(unsigned cap, bool ordered, LockGranularity g = LockGranularity::Pixel, bool per_primitive = true) {
   LockConfig c;
   c.capacity = cap;
   c.ordered = ordered;
+  c.granularity = g;
+  c.per_primitive = per_primitive;
   return c;
 }
 
@@ -32,7 +34,7 @@ std::vector<uint32_t> drainReady(PixelLock& l, Cycle now) {
 
 TEST(PixelLock, OrderedAdmitsSameAddressInSubmissionOrder) {
   PixelLock l(lockCfg(8, true));
-  const uint32_t t0 = l.allocate(5), t1 = l.allocate(5), t2 = l.allocate(5);
+  const uint32_t t0 = l.allocate(5, 0), t1 = l.allocate(5, 0), t2 = l.allocate(5, 0);  // pixel: owners ignored
   l.arrive(1, t2);  // shaded out of order
   l.arrive(2, t1);
   EXPECT_FALSE(l.hasReady());
@@ -53,7 +55,7 @@ TEST(PixelLock, OrderedAdmitsSameAddressInSubmissionOrder) {
 
 TEST(PixelLock, UnorderedIsMutualExclusionAndCountsOutOfOrderEntries) {
   PixelLock l(lockCfg(8, false));
-  const uint32_t t0 = l.allocate(7), t1 = l.allocate(7), t2 = l.allocate(7);
+  const uint32_t t0 = l.allocate(7, 0), t1 = l.allocate(7, 1), t2 = l.allocate(7, 2);
   l.arrive(1, t2);
   EXPECT_EQ(drainReady(l, 1), std::vector<uint32_t>{t2});  // enters before older t0, t1
   l.arrive(2, t1);
@@ -71,7 +73,7 @@ TEST(PixelLock, UnorderedIsMutualExclusionAndCountsOutOfOrderEntries) {
 TEST(PixelLock, DistinctAddressesNeverWaitAndCapacityBoundsOccupancy) {
   PixelLock l(lockCfg(4, true));
   std::vector<uint32_t> t;
-  for (uint32_t a = 0; a < 4; ++a) t.push_back(l.allocate(a * 977));
+  for (uint32_t a = 0; a < 4; ++a) t.push_back(l.allocate(a * 977, a));
   EXPECT_TRUE(l.full());
   for (uint32_t i = 4; i-- > 0;) l.arrive(1, t[i]);
   EXPECT_EQ(drainReady(l, 1).size(), 4u);
@@ -83,7 +85,7 @@ TEST(PixelLock, DistinctAddressesNeverWaitAndCapacityBoundsOccupancy) {
 
 TEST(PixelLock, DroppedFragmentUnblocksItsSuccessor) {
   PixelLock l(lockCfg(4, true));
-  const uint32_t culled = l.allocate(3), next = l.allocate(3);
+  const uint32_t culled = l.allocate(3, 0), next = l.allocate(3, 1);
   l.arrive(4, next);
   EXPECT_FALSE(l.hasReady());
   l.drop(9, culled);  // early depth culled the older fragment
@@ -91,56 +93,139 @@ TEST(PixelLock, DroppedFragmentUnblocksItsSuccessor) {
   EXPECT_EQ(l.stats().wait_cycles, 5u);
 }
 
-// Random stall injector: random addresses, shader latencies and blend times;
-// checks the interlock's invariants every cycle.
-TEST(PixelLock, RandomTrafficKeepsInvariants) {
-  for (bool ordered : {true, false}) {
-    std::mt19937 rng(ordered ? 1 : 2);
-    PixelLock l(lockCfg(32, ordered));
-    std::map<uint32_t, uint32_t> addr_of;   // token -> address
-    std::map<uint32_t, uint64_t> seq_of;    // token -> submission index
-    std::multimap<Cycle, uint32_t> arrive_at, release_at;
-    std::map<uint32_t, uint64_t> last_entered;  // address -> seq of the last entry
-    std::map<uint32_t, int> inside;
-    uint64_t seq = 0, released = 0;
-    const uint64_t total = 3000;
-    for (Cycle now = 0; released < total; ++now) {
-      for (auto it = release_at.begin(); it != release_at.end() && it->first <= now; it = release_at.erase(it)) {
-        --inside[addr_of[it->second]];
-        l.release(now, it->second);
-        ++released;
-      }
-      for (auto it = arrive_at.begin(); it != arrive_at.end() && it->first <= now; it = arrive_at.erase(it))
-        l.arrive(now, it->second);
-      while (l.hasReady() && rng() % 4 != 0) {  // stall injector on the consumer
-        const uint32_t t = l.frontReady();
-        l.enterFront(now);
-        const uint32_t a = addr_of[t];
-        ASSERT_EQ(inside[a]++, 0) << "two fragments inside address " << a;
-        if (ordered) {
-          auto le = last_entered.find(a);
-          if (le != last_entered.end()) {
-            ASSERT_LT(le->second, seq_of[t]) << "ordered lock out of submission order";
-          }
-          last_entered[a] = seq_of[t];
-        }
-        release_at.emplace(now + 1 + rng() % 12, t);
-      }
-      if (seq < total && !l.full() && rng() % 2) {
-        const uint32_t a = uint32_t(rng() % 6) * 1000003u;  // few hot addresses, colliding hashes
-        const uint32_t t = l.allocate(a);
-        addr_of[t] = a;
-        seq_of[t] = seq++;
-        arrive_at.emplace(now + 1 + rng() % 30, t);
-      }
-      ASSERT_LT(now, 1000000u);
-    }
-    EXPECT_EQ(l.occupancy(), 0u);
-    EXPECT_EQ(l.stats().entries, total);
-    EXPECT_GT(l.stats().conflicts, 0u);
-    if (ordered) EXPECT_EQ(l.stats().out_of_order_entries, 0u);
-    else EXPECT_GT(l.stats().out_of_order_entries, 0u);
+// Quad/tile granularity with lock.per_primitive: fragments of one owner (a
+// primitive's run) share the address; the next owner waits for all of them.
+TEST(PixelLock, OrderedGroupedOwnersEnterTogether) {
+  PixelLock l(lockCfg(8, true, LockGranularity::Quad));
+  ASSERT_TRUE(l.grouped());
+  const uint32_t a0 = l.allocate(5, 10), a1 = l.allocate(5, 10), b0 = l.allocate(5, 12), b1 = l.allocate(5, 12);
+  l.arrive(1, a1);  // before the older a0 arrived: same primitive, no wait
+  EXPECT_EQ(drainReady(l, 1), std::vector<uint32_t>{a1});
+  l.arrive(2, b1);
+  l.arrive(3, b0);
+  EXPECT_FALSE(l.hasReady());
+  l.release(4, a1);
+  EXPECT_FALSE(l.hasReady());  // a0 of the older primitive is still in flight
+  l.arrive(5, a0);
+  EXPECT_EQ(drainReady(l, 5), std::vector<uint32_t>{a0});
+  l.release(9, a0);
+  EXPECT_EQ(drainReady(l, 9), (std::vector<uint32_t>{b0, b1}));  // the whole next primitive, oldest first
+  l.release(10, b1);
+  l.release(11, b0);
+  EXPECT_EQ(l.stats().conflicts, 2u);
+  EXPECT_EQ(l.stats().wait_cycles, (9u - 2u) + (9u - 3u));
+  EXPECT_EQ(l.stats().out_of_order_entries, 0u);
+  EXPECT_EQ(l.occupancy(), 0u);
+}
+
+TEST(PixelLock, UngroupedQuadAndPixelGranularityIgnoreOwners) {
+  for (const LockConfig& c : {lockCfg(8, true, LockGranularity::Quad, false), lockCfg(8, true, LockGranularity::Pixel)}) {
+    PixelLock l(c);
+    EXPECT_FALSE(l.grouped());
+    const uint32_t a0 = l.allocate(5, 10), a1 = l.allocate(5, 10);
+    l.arrive(1, a1);
+    EXPECT_FALSE(l.hasReady());  // waits for a0 though it is of the same primitive
+    l.arrive(2, a0);
+    EXPECT_EQ(drainReady(l, 2), std::vector<uint32_t>{a0});
+    l.release(6, a0);
+    EXPECT_EQ(drainReady(l, 6), std::vector<uint32_t>{a1});
+    EXPECT_EQ(l.stats().conflicts, 1u);
+    EXPECT_EQ(l.stats().wait_cycles, 5u);
   }
+}
+
+TEST(PixelLock, UnorderedGroupedOwnersShareTheAddress) {
+  PixelLock l(lockCfg(8, false, LockGranularity::Tile));
+  const uint32_t a0 = l.allocate(7, 1), a1 = l.allocate(7, 1), b0 = l.allocate(7, 3);
+  l.arrive(1, b0);
+  EXPECT_EQ(drainReady(l, 1), std::vector<uint32_t>{b0});  // out of order: a0, a1 older
+  l.arrive(2, a0);
+  l.arrive(3, a1);
+  EXPECT_FALSE(l.hasReady());  // another owner inside
+  l.release(6, b0);
+  EXPECT_EQ(drainReady(l, 6), (std::vector<uint32_t>{a0, a1}));
+  const uint32_t a2 = l.allocate(7, 1);  // a later fragment of the owner inside joins it
+  l.arrive(7, a2);
+  EXPECT_EQ(drainReady(l, 7), std::vector<uint32_t>{a2});
+  l.release(8, a0);
+  l.release(8, a1);
+  l.release(9, a2);
+  EXPECT_EQ(l.stats().conflicts, 2u);
+  EXPECT_EQ(l.stats().wait_cycles, (6u - 2u) + (6u - 3u));
+  EXPECT_EQ(l.stats().out_of_order_entries, 1u);  // b0 only
+  EXPECT_EQ(l.occupancy(), 0u);
+}
+
+// Random stall injector: random addresses, owners (primitive runs), shader
+// latencies and blend times; checks the interlock's invariants every cycle:
+// inside an address only one owner; ordered: a fragment enters only when no
+// older fragment of its address and of another owner is in flight.
+TEST(PixelLock, RandomTrafficKeepsInvariants) {
+  for (const bool grouped : {false, true})
+    for (const bool ordered : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << "grouped " << grouped << " ordered " << ordered);
+      std::mt19937 rng((ordered ? 1 : 2) + (grouped ? 10 : 0));
+      PixelLock l(lockCfg(32, ordered, grouped ? LockGranularity::Quad : LockGranularity::Pixel));
+      ASSERT_EQ(l.grouped(), grouped);
+      std::map<uint32_t, uint32_t> addr_of, owner_of;  // token -> address, owner
+      std::map<uint32_t, uint64_t> seq_of;              // token -> submission index
+      std::multimap<Cycle, uint32_t> arrive_at, release_at;
+      std::map<uint32_t, std::set<uint32_t>> in_flight;  // address -> tokens allocated, not released
+      std::map<uint32_t, std::set<uint32_t>> inside;     // address -> tokens entered, not released
+      uint64_t seq = 0, released = 0, shared_entries = 0;
+      uint32_t run = 0;
+      const uint64_t total = 3000;
+      for (Cycle now = 0; released < total; ++now) {
+        for (auto it = release_at.begin(); it != release_at.end() && it->first <= now; it = release_at.erase(it)) {
+          const uint32_t t = it->second;
+          inside[addr_of[t]].erase(t);
+          in_flight[addr_of[t]].erase(t);
+          l.release(now, t);
+          ++released;
+        }
+        for (auto it = arrive_at.begin(); it != arrive_at.end() && it->first <= now; it = arrive_at.erase(it))
+          l.arrive(now, it->second);
+        while (l.hasReady() && rng() % 4 != 0) {  // stall injector on the consumer
+          const uint32_t t = l.frontReady();
+          l.enterFront(now);
+          const uint32_t a = addr_of[t];
+          for (uint32_t o : inside[a]) {
+            ASSERT_TRUE(grouped && owner_of[o] == owner_of[t]) << "two owners inside address " << a;
+            ++shared_entries;
+          }
+          if (ordered) {
+            for (uint32_t o : in_flight[a])
+              if (seq_of[o] < seq_of[t]) {
+                ASSERT_TRUE(grouped && owner_of[o] == owner_of[t]) << "ordered lock out of submission order";
+              }
+          }
+          inside[a].insert(t);
+          release_at.emplace(now + 1 + rng() % 12, t);
+        }
+        if (seq < total && !l.full() && rng() % 2) {
+          const uint32_t a = uint32_t(rng() % 6) * 1000003u;  // few hot addresses
+          if (rng() % 3 == 0) run = uint32_t(seq);                  // a new primitive starts
+          const uint32_t t = l.allocate(a, run);
+          addr_of[t] = a;
+          owner_of[t] = run;
+          seq_of[t] = seq++;
+          in_flight[a].insert(t);
+          arrive_at.emplace(now + 1 + rng() % 30, t);
+        }
+        ASSERT_LT(now, 1000000u);
+      }
+      EXPECT_EQ(l.occupancy(), 0u);
+      EXPECT_EQ(l.stats().entries, total);
+      EXPECT_GT(l.stats().conflicts, 0u);
+      if (grouped) {
+        EXPECT_GT(shared_entries, 0u);  // owners did share addresses
+      }
+      if (ordered) {
+        EXPECT_EQ(l.stats().out_of_order_entries, 0u);
+      } else {
+        EXPECT_GT(l.stats().out_of_order_entries, 0u);
+      }
+    }
 }
 
 // ---- End to end: the lock in the timing model ----
@@ -229,10 +314,16 @@ TEST(PixelLockTiming, DistinctPixelsRunAtTheInputRateWithoutLockWaits) {
 //  - tile: every fragment but the first waits: 63 conflicts; releases at
 //    45 + 20 j for the j-th; the pass ends at 45 + 63 x 20 = 1305; fragment k
 //    (k >= 1) waits from floor(k/2) + 24 to 45 + 20 (k - 1).
+// Each fragment is its own primitive here. When all 64 are one primitive,
+// lock.per_primitive lets them hold the quad/tile lock together: the pixel
+// case's figures at every granularity; without it, the figures above again.
 TEST(PixelLockTiming, GranularitySetsTheLockAddressOfOneTile) {
-  std::vector<Fragment> fs;
+  std::vector<Fragment> fs, one_prim;
   for (uint16_t y = 0; y < 8; ++y)
-    for (uint16_t x = 0; x < 8; ++x) fs.push_back(model::testutil::frag(x, y, 0.5f, 1, 0, 0, 0.5f));
+    for (uint16_t x = 0; x < 8; ++x) {
+      fs.push_back(model::testutil::frag(x, y, 0.5f, 1, 0, 0, 0.5f, model::testutil::kTranspDraw, y * 8u + x));
+      one_prim.push_back(model::testutil::frag(x, y, 0.5f, 1, 0, 0, 0.5f, model::testutil::kTranspDraw, 7));
+    }
   RopConfig base = onePartition();
   ASSERT_EQ(base.partitions.tile_width, 8u);
   ASSERT_EQ(base.partitions.tile_height, 8u);
@@ -243,16 +334,26 @@ TEST(PixelLockTiming, GranularitySetsTheLockAddressOfOneTile) {
   for (uint64_t k = 1; k < 64; ++k) tile_wait += 45 + H * (k - 1) - (k / 2 + 24);
   struct Case {
     LockGranularity g;
+    bool one_primitive, per_primitive;
     uint64_t conflicts, pass, wait;
   };
-  for (const Case& c : {Case{LockGranularity::Pixel, 0, 76, 0}, Case{LockGranularity::Quad, 48, 132, 16 * (21 + 37 + 57)},
-                        Case{LockGranularity::Tile, 63, 45 + 63 * H, tile_wait}}) {
-    SCOPED_TRACE(int(c.g));
+  const uint64_t quad_wait = 16 * (21 + 37 + 57);
+  for (const Case& c : {Case{LockGranularity::Pixel, false, true, 0, 76, 0},
+                        Case{LockGranularity::Quad, false, true, 48, 132, quad_wait},
+                        Case{LockGranularity::Tile, false, true, 63, 45 + 63 * H, tile_wait},
+                        Case{LockGranularity::Pixel, true, true, 0, 76, 0},
+                        Case{LockGranularity::Quad, true, true, 0, 76, 0},
+                        Case{LockGranularity::Tile, true, true, 0, 76, 0},
+                        Case{LockGranularity::Quad, true, false, 48, 132, quad_wait},
+                        Case{LockGranularity::Tile, true, false, 63, 45 + 63 * H, tile_wait}}) {
+    SCOPED_TRACE(::testing::Message() << "granularity " << int(c.g) << " one primitive " << c.one_primitive
+                                      << " per_primitive " << c.per_primitive);
     RopConfig cfg = base;
     cfg.lock.granularity = c.g;
+    cfg.lock.per_primitive = c.per_primitive;
     model::AlgorithmParams p;
     p.format = model::StorageFormat::Rgba8T8Z32;
-    const auto r = runInChild([&] { return timed("mlab", p, fs, 8, 8, cfg); });
+    const auto r = runInChild([&] { return timed("mlab", p, c.one_primitive ? one_prim : fs, 8, 8, cfg); });
     ASSERT_TRUE(r.ok) << r.error;
     const auto& part = r.stats["timing"]["per_partition"][0];
     EXPECT_EQ(part["opaque_end_cycle"].get<uint64_t>(), 0u);
