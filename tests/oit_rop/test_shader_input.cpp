@@ -99,3 +99,18 @@ TEST(ShaderInput, IssuedFragmentsLeaveAfterLatencyOf) {
     }
   }
 }
+
+// Values recorded from the model before input.warp_size existed (and equal to
+// 40 + splitmix64(splitmix64(seed ^ pass << 56) ^ seq) mod 81): with one
+// fragment per warp, the default, every latency stays what it was.
+TEST(ShaderInput, UniformLatencyPinnedValues) {
+  InputConfig c;  // igpu: Uniform[40, 120], seed 1
+  ShaderInput s(c);
+  struct Pin {
+    uint64_t seq;
+    unsigned pass, latency;
+  };
+  for (const Pin& p : {Pin{0, 0, 53}, Pin{1, 0, 49}, Pin{2, 0, 41}, Pin{31, 0, 56}, Pin{32, 0, 49},
+                       Pin{1000003, 0, 89}, Pin{0, 1, 64}, Pin{7, 1, 64}, Pin{0xFFFFFFFFull, 2, 58}})
+    EXPECT_EQ(s.latencyOf(p.seq, p.pass), p.latency) << "seq " << p.seq << " pass " << p.pass;
+}
