@@ -143,6 +143,10 @@ const std::vector<Property>& registry() {
               "shortest pixel-shader latency"),
       integer("input.latency_max", &R::input, &InputConfig::latency_max, 1, 1000000, "cycles",
               "longest pixel-shader latency (uniform model)"),
+      integer("input.warp_size", &R::input, &InputConfig::warp_size, 1, 1024, "fragments",
+              "fragments that share one pixel-shader latency draw (uniform model): consecutive trace fragments "
+              "(by sequence number) form a warp; 1 = every fragment draws its own",
+              true),
       integer("input.seed", &R::input, &InputConfig::seed, 0, std::numeric_limits<uint64_t>::max(), "",
               "seed of the shader-latency distribution"),
 

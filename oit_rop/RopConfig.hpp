@@ -30,6 +30,7 @@ struct InputConfig {
   LatencyModel latency_model = LatencyModel::Uniform;
   unsigned latency_min = 40;  // cycles of pixel-shader latency (fixed model: latency_min)
   unsigned latency_max = 120;
+  unsigned warp_size = 1;     // consecutive fragments (by sequence number) sharing one latency draw; power of two
   uint64_t seed = 1;          // latency distribution seed
   bool operator==(const InputConfig&) const = default;
 };

@@ -2,9 +2,11 @@
 // input.fragments_per_clock and leave it after a latency that is Fixed
 // (latency_min) or Uniform[min, max] drawn from a seeded hash of the
 // fragment's sequence number (deterministic, no global RNG), so shaded
-// fragments reach the PixelLock out of submission order. A timing wheel holds
-// the fragments in flight (no heap). Issue needs a scoreboard entry: the
-// partition stalls issue with "scoreboard full" when none is free.
+// fragments reach the PixelLock out of submission order. The uniform draw is
+// per warp: input.warp_size consecutive sequence numbers share one latency. A
+// timing wheel holds the fragments in flight (no heap). Issue needs a
+// scoreboard entry: the partition stalls issue with "scoreboard full" when
+// none is free.
 #pragma once
 
 #include <algorithm>
@@ -19,7 +21,8 @@ class ShaderInput {
  public:
   explicit ShaderInput(const InputConfig& cfg);
 
-  // Pixel-shader latency of the fragment with sequence number `seq` in `pass`.
+  // Pixel-shader latency of the fragment with sequence number `seq` in `pass`
+  // (uniform model: drawn for its warp, seq >> log2(warp_size)).
   unsigned latencyOf(uint64_t seq, unsigned pass) const;
   // How many fragments may issue at `now` (input rate); take one per issue().
   unsigned slots(Cycle now) { return rate_.available(now); }
@@ -29,7 +32,7 @@ class ShaderInput {
     if (!fixed_) {
       // latencyOf() with the per-pass half of the hash computed once per pass.
       if (pass != mix_pass_) newPass(pass);
-      lat = std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ seq))));
+      lat = std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ (seq >> warp_shift_)))));
     }
     wheel_.schedule(now + lat, token);
     ++issued_;
@@ -57,6 +60,7 @@ class ShaderInput {
   bool fixed_ = true;
   uint64_t span_ = 1;                    // latency_max - latency_min + 1
   unsigned fixed_lat_ = 1;               // the fixed model's latency
+  unsigned warp_shift_ = 0;              // log2(input.warp_size): seq >> warp_shift_ numbers the warp
   // h % span_ without a 64-bit division (it was the costliest instruction of
   // the issue): q = mulhi(h, floor(2^64 / span_)) is at most 2 below h / span_,
   // so at most two corrections give the exact remainder.

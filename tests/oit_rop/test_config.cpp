@@ -230,6 +230,37 @@ TEST(ConfigTree, BadValues) {
   EXPECT_EQ(t.config(), ConfigTree::forPreset("igpu").config());
 }
 
+// input.warp_size: a power of two from 1 to 1024; both presets keep 1 (every
+// fragment draws its own shader latency).
+TEST(ConfigTree, WarpSize) {
+  for (const std::string& preset : presetNames()) EXPECT_EQ(ConfigTree::forPreset(preset).config().input.warp_size, 1u);
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  std::string e = errorOf([&] { t.set("input.warp_size", "3"); });
+  EXPECT_EQ(e, "input.warp_size: '3' is not a power of two; expected an integer [1, 1024], power of two (fragments)");
+  e = errorOf([&] { t.set("input.warp_size", "0"); });
+  EXPECT_NE(e.find("input.warp_size: '0' is out of range"), std::string::npos) << e;
+  e = errorOf([&] { t.set("input.warp_size", "2048"); });
+  EXPECT_NE(e.find("input.warp_size: '2048' is out of range"), std::string::npos) << e;
+  e = errorOf([] { resolveConfig("igpu", "", {"input.warp_size=3"}); });
+  EXPECT_EQ(e.rfind("--set 'input.warp_size=3': input.warp_size: '3' is not a power of two", 0), 0u) << e;
+  EXPECT_EQ(t.config(), ConfigTree::forPreset("igpu").config());  // refused values leave the tree unchanged
+
+  t.set("input.warp_size", "64");
+  EXPECT_EQ(t.config().input.warp_size, 64u);
+  EXPECT_NO_THROW(t.validate());
+  EXPECT_EQ(resolveConfig("dgpu", "", {"input.warp_size=64"}).input.warp_size, 64u);
+  // The effective configuration lists it, changed from the preset's 1.
+  const std::string d = t.describe();
+  const size_t row = d.find("input.warp_size ");
+  ASSERT_NE(row, std::string::npos) << d;
+  const std::string line = d.substr(row, d.find('\n', row) - row);
+  EXPECT_NE(line.find(" 64 "), std::string::npos) << line;
+  EXPECT_NE(line.find("fragments"), std::string::npos) << line;
+  EXPECT_NE(line.find(" 1 "), std::string::npos) << line;  // the preset's value
+  EXPECT_EQ(d[d.rfind('\n', row) + 1], '*');
+  EXPECT_EQ(t.toJson()["input"]["warp_size"], 64);
+}
+
 TEST(ConfigTree, CrossFieldValidation) {
   ConfigTree t = ConfigTree::forPreset("igpu");
   t.set("input.latency_min", "200");

@@ -72,15 +72,16 @@ TEST(ShaderInput, UniformLatencyReordersFragments) {
 
 // issue() reduces the latency hash with a multiply instead of a 64-bit
 // division; every fragment must still leave after exactly latencyOf() cycles,
-// for spans that are and are not powers of two, one-cycle spans, and the
-// largest hashes.
+// for spans that are and are not powers of two, one-cycle spans, the largest
+// hashes, and warps of one, four and 1024 fragments.
 TEST(ShaderInput, IssuedFragmentsLeaveAfterLatencyOf) {
   for (auto [lo, hi] : {std::pair{40u, 120u}, {1u, 1u}, {0u, 0u}, {3u, 4u}, {5u, 68u}, {1u, 1000u}, {0u, 6999u}}) {
     InputConfig c;
     c.latency_min = lo;
     c.latency_max = hi;
     c.seed = 0xC0FFEEull * (hi + 1);
-    for (unsigned pass : {0u, 3u}) {
+    for (auto [pass, warp] : {std::pair{0u, 1u}, {3u, 1u}, {0u, 4u}, {3u, 1024u}}) {
+      c.warp_size = warp;
       ShaderInput s(c);
       const uint64_t base = pass == 3 ? ~uint64_t(0) - 3000 : 0;  // sequence numbers up to 2^64 - 1
       constexpr uint32_t kCount = 3000;
@@ -95,7 +96,8 @@ TEST(ShaderInput, IssuedFragmentsLeaveAfterLatencyOf) {
         ASSERT_LT(now, Cycle(kCount) + hi + 2);
       }
       for (uint32_t i = 0; i < kCount; ++i)
-        ASSERT_EQ(left[i], i + s.latencyOf(base + i, pass)) << "latency " << lo << ".." << hi << " seq " << base + i;
+        ASSERT_EQ(left[i], i + s.latencyOf(base + i, pass))
+            << "latency " << lo << ".." << hi << " warp " << warp << " seq " << base + i;
     }
   }
 }
@@ -113,4 +115,45 @@ TEST(ShaderInput, UniformLatencyPinnedValues) {
   for (const Pin& p : {Pin{0, 0, 53}, Pin{1, 0, 49}, Pin{2, 0, 41}, Pin{31, 0, 56}, Pin{32, 0, 49},
                        Pin{1000003, 0, 89}, Pin{0, 1, 64}, Pin{7, 1, 64}, Pin{0xFFFFFFFFull, 2, 58}})
     EXPECT_EQ(s.latencyOf(p.seq, p.pass), p.latency) << "seq " << p.seq << " pass " << p.pass;
+}
+
+// input.warp_size: the fragments of a warp (warp_size consecutive sequence
+// numbers) share one draw, the draw of the warp's number seq >> log2(warp_size).
+TEST(ShaderInput, WarpSharesOneLatency) {
+  InputConfig one;  // igpu: Uniform[40, 120], warps of one fragment
+  InputConfig w32 = one;
+  w32.warp_size = 32;
+  const ShaderInput a(one), b(w32);
+  for (unsigned pass : {0u, 1u}) {
+    for (uint64_t seq = 0; seq < 64; ++seq)
+      ASSERT_EQ(b.latencyOf(seq, pass), a.latencyOf(seq >> 5, pass)) << "seq " << seq << " pass " << pass;
+    // Sequence numbers near 2^64: the last warp is whole.
+    const uint64_t top = ~uint64_t(0);
+    EXPECT_EQ(b.latencyOf(top, pass), a.latencyOf(top >> 5, pass));
+    EXPECT_EQ(b.latencyOf(top - 31, pass), b.latencyOf(top, pass));
+  }
+  // Recorded values (UniformLatencyPinnedValues): warp 0 draws as fragment 0,
+  // warp 1 (fragments 32..63) as fragment 1.
+  EXPECT_EQ(b.latencyOf(0, 0), 53u);
+  EXPECT_EQ(b.latencyOf(31, 0), 53u);
+  EXPECT_EQ(b.latencyOf(32, 0), 49u);
+  EXPECT_EQ(b.latencyOf(63, 0), 49u);
+  // The fixed model ignores the warp.
+  w32.latency_model = LatencyModel::Fixed;
+  EXPECT_EQ(ShaderInput(w32).latencyOf(5, 0), 40u);
+}
+
+TEST(ShaderInput, WarpLatenciesStillCoverTheRange) {
+  InputConfig c;  // Uniform[40, 120]: a span of 81
+  c.warp_size = 32;
+  const ShaderInput s(c);
+  std::set<unsigned> seen;
+  for (uint64_t w = 0; w < 20000; ++w) {
+    const unsigned l = s.latencyOf(w * 32 + w % 32, 0);  // any fragment of the warp
+    ASSERT_EQ(l, s.latencyOf(w * 32, 0)) << "warp " << w;
+    seen.insert(l);
+  }
+  EXPECT_EQ(*seen.begin(), 40u);
+  EXPECT_EQ(*seen.rbegin(), 120u);
+  EXPECT_EQ(seen.size(), 81u);
 }
