@@ -77,7 +77,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 14u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 48u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 49u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
