@@ -1,6 +1,9 @@
 #include <fmt/format.h>
 
+#include <charconv>
+#include <cstdint>
 #include <filesystem>
+#include <system_error>
 #include <stdexcept>
 #include <tuple>
 #include <string>
@@ -11,6 +14,38 @@
 namespace oit::cli {
 namespace {
 std::string g_command_line;
+}
+
+namespace {
+// "" when v is a decimal unsigned integer (stored in x), else what is wrong.
+std::string parseUnsigned(const std::string& v, uint64_t& x) {
+  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (ec == std::errc::result_out_of_range && end == v.data() + v.size())
+    return "'" + v + "' is too large for this option";
+  if (v.empty() || ec != std::errc() || end != v.data() + v.size())
+    return "expected a non-negative integer, got '" + v + "'";
+  return {};
+}
+}  // namespace
+
+CLI::Validator unsignedText() {
+  return CLI::Validator(
+      [](std::string& v) {
+        uint64_t x = 0;
+        return parseUnsigned(v, x);
+      },
+      "UINT");
+}
+
+CLI::Validator unsignedRange(uint64_t lo, uint64_t hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) {
+        uint64_t x = 0;
+        std::string e = parseUnsigned(v, x);
+        if (e.empty() && (x < lo || x > hi)) e = fmt::format("Value {} not in range {} to {}", v, lo, hi);
+        return e;
+      },
+      fmt::format("UINT in [{} - {}]", lo, hi));
 }
 
 void setCommandLine(int argc, char* argv[]) {

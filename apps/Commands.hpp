@@ -23,6 +23,14 @@ void addConfigCommand(CLI::App& app);   // oitsim config [--preset P] [--config 
 void addSweepCommand(CLI::App& app);   // oitsim sweep SPEC --out DIR [--jobs N] [--emit slurm]
 void addReportCommand(CLI::App& app);  // oitsim report DIR -> DIR/report.html
 
+// CLI11 2.1 reads an unsigned option with strtoull: "-5" wraps around and a
+// value past 2^64 - 1 saturates, both silently. unsignedText() takes digits
+// only ("expected a non-negative integer, got 'abc'"); main() adds it to every
+// unsigned option. unsignedRange(): that first, then CLI::Range(lo, hi), for
+// options with a range (a range check alone says "Value abc not in range").
+CLI::Validator unsignedText();
+CLI::Validator unsignedRange(uint64_t lo, uint64_t hi);
+
 // The command line as typed (recorded in reports so a run can be repeated).
 void setCommandLine(int argc, char* argv[]);
 const std::string& commandLine();

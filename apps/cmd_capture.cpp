@@ -118,8 +118,8 @@ void addCaptureCommand(CLI::App& app) {
   cmd->add_option("-o,--output", args->output,
                   "Trace file to write (.csv for CSV); with --frames N: NAME-0000.EXT ...")
       ->required();
-  cmd->add_option("--width", o.width, "Frame width in pixels")->capture_default_str()->check(CLI::Range(1u, 16384u));
-  cmd->add_option("--height", o.height, "Frame height in pixels")->capture_default_str()->check(CLI::Range(1u, 16384u));
+  cmd->add_option("--width", o.width, "Frame width in pixels")->capture_default_str()->check(unsignedRange(1, 16384));
+  cmd->add_option("--height", o.height, "Frame height in pixels")->capture_default_str()->check(unsignedRange(1, 16384));
   CLI::Option* az = cmd->add_option("--azimuth", args->azimuth, "Camera azimuth in degrees (default 30, as gen mesh)");
   CLI::Option* el = cmd->add_option("--elevation", args->elevation, "Camera elevation in degrees (default 5)");
   cmd->add_option("--distance", o.distance, "Camera distance from the origin (0 = fit)");
@@ -136,7 +136,7 @@ void addCaptureCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--frames", args->frames, "Frames along an orbit, one trace each")
       ->capture_default_str()
-      ->check(CLI::Range(1u, 100000u));
+      ->check(unsignedRange(1, 100000));
   cmd->add_option("--orbit-step", args->orbit_step, "Azimuth step between frames, degrees")->capture_default_str();
   cmd->add_flag("--verify", args->verify,
                 "Also check each trace against GL's own blended framebuffer and a counting pass");

@@ -93,8 +93,8 @@ void addGenCommand(CLI::App& app) {
   cmd->add_option("-o,--output", args->output, "Trace file to write (.csv for CSV)")->required();
   gen::SceneOptions& o = args->opts;
   // 65535: x and y are u16 in a trace record (traces/FORMAT.md).
-  cmd->add_option("--width", o.width, "Frame width in pixels")->capture_default_str()->check(CLI::Range(1u, 65535u));
-  cmd->add_option("--height", o.height, "Frame height in pixels")->capture_default_str()->check(CLI::Range(1u, 65535u));
+  cmd->add_option("--width", o.width, "Frame width in pixels")->capture_default_str()->check(unsignedRange(1, 65535));
+  cmd->add_option("--height", o.height, "Frame height in pixels")->capture_default_str()->check(unsignedRange(1, 65535));
   cmd->add_option("--seed", o.seed, "Random seed; the same seed gives the same trace")->capture_default_str();
   cmd->add_flag("--backdrop", o.backdrop, "Draw an opaque wall, floor and pillar first");
   cmd->add_option("--count", o.count, "Number of quads/strands/cards/panes (0 = scene default)");

@@ -35,19 +35,9 @@ extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::addConfigCommand(app);
   oit::cli::addSweepCommand(app);
   oit::cli::addReportCommand(app);
-  // CLI11 2.1 reads an unsigned option with strtoull: "-5" wraps around and a
-  // value past 2^64 - 1 saturates, both silently. Unsigned options take digits only.
-  const auto unsigned_text = CLI::Validator(
-      [](std::string& v) -> std::string {
-        uint64_t x = 0;
-        const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
-        if (ec == std::errc::result_out_of_range && end == v.data() + v.size())
-          return "'" + v + "' is too large for this option";
-        if (v.empty() || ec != std::errc() || end != v.data() + v.size())
-          return "expected a non-negative integer, got '" + v + "'";
-        return {};
-      },
-      "UINT");
+  // Unsigned options take digits only (unsignedText()); options with a range
+  // check it first, so the range sees a number.
+  const CLI::Validator unsigned_text = oit::cli::unsignedText();
   for (CLI::App* sub : app.get_subcommands({}))
     for (CLI::Option* o : sub->get_options())
       if (o->get_type_name() == "UINT") o->check(unsigned_text);

@@ -306,6 +306,18 @@ TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
   CliResult r = runOitsim("gen glass -o " + dir_->file("g.oitt") + " --width 0");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_EQ(r.output, "oitsim: error: --width: Value 0 not in range 1 to 65535 (see --help)\n");
+  // A ranged option checks the number first (the range check alone said "Value abc not in range").
+  for (const std::string& cmd : {"gen glass -o " + dir_->file("g.oitt"), "capture --mesh bunny -o " + dir_->file("c.oitt")}) {
+    r = runOitsim(cmd + " --width abc");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_EQ(r.output, "oitsim: error: --width: expected a non-negative integer, got 'abc' (see --help)\n") << cmd;
+    r = runOitsim(cmd + " --height -3");
+    EXPECT_EQ(r.output, "oitsim: error: --height: expected a non-negative integer, got '-3' (see --help)\n") << cmd;
+  }
+  r = runOitsim("capture --mesh bunny -o " + dir_->file("c.oitt") + " --frames 100001");
+  EXPECT_EQ(r.output, "oitsim: error: --frames: Value 100001 not in range 1 to 100000 (see --help)\n");
+  EXPECT_FALSE(fs::exists(dir_->file("g.oitt")));
+  EXPECT_FALSE(fs::exists(dir_->file("c.oitt")));
   EXPECT_EQ(runOitsim("run --help").exit_code, 0);
   r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --seed 18446744073709551615");
   EXPECT_EQ(r.exit_code, 0) << r.output;
