@@ -62,6 +62,7 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       opaque_(opaque),
       geo_(geo),
       hierarchical_(cfg.early_depth.hierarchical),
+      prim_runs_(cfg.lock.per_primitive && cfg.lock.granularity != LockGranularity::Pixel),
       words_(algo.stateWords()),
       passes_(algo.passes()),
       state_(size_t(geo.width) * geo.height * algo.stateWords()),
@@ -148,6 +149,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   model::InsertContext ctx;
   uint32_t seq = uint32_t(index_);
   uint32_t run_draw = run_draw_, run_prim = run_prim_, run_start = run_start_;
+  const bool prim_runs = prim_runs_;
   const size_t n = batch.size();
   const size_t pixel_bytes = size_t(words) * sizeof(uint32_t);
   for (size_t i = 0; i < n; ++i, ++seq) {
@@ -178,7 +180,9 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     const uint32_t pixel = uint32_t(f.y) * width + f.x;
     const uint32_t tile = tile_row[f.y] + tile_col[f.x];
     const float oz = opaque_z[pixel];
-    if ((f.prim != run_prim) | (f.draw != run_draw) | (seq - run_start > 0xFFFF)) {
+    if (!prim_runs) {
+      run_start = seq;  // offset 0: the lock does not group (and does not read it)
+    } else if ((f.prim != run_prim) | (f.draw != run_draw) | (seq - run_start > 0xFFFF)) {
       run_draw = f.draw;
       run_prim = f.prim;
       run_start = seq;

@@ -119,6 +119,7 @@ class FrontEnd {
   const model::OpaqueLayer& opaque_;
   const FrameGeometry& geo_;
   bool hierarchical_;
+  bool prim_runs_;  // the PixelLock groups owners (lock.per_primitive at quad/tile granularity)
   unsigned words_, passes_, pass_ = 0;
   bool exhausted_ = false;
   uint64_t index_ = 0, source_reads_ = 0;
