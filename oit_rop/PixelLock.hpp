@@ -230,7 +230,10 @@ inline void PixelLock::wakeUnordered(Cycle now, uint32_t a) {
   while (i >= 0 && tok_[size_t(i)].state != State::Waiting) i = tok_[size_t(i)].next;
   if (i < 0) return;
   b.owner = tok_[size_t(i)].owner;
-  for (; i >= 0; i = tok_[size_t(i)].next)
+  b.count = 1;
+  admit(now, uint32_t(i));
+  if (!grouped_) return;  // its own owner: nobody else to admit
+  for (i = tok_[size_t(i)].next; i >= 0; i = tok_[size_t(i)].next)
     if (tok_[size_t(i)].state == State::Waiting && tok_[size_t(i)].owner == b.owner) {
       ++b.count;
       admit(now, uint32_t(i));
