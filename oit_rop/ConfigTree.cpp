@@ -2,6 +2,7 @@
 // so the tree and the struct cannot drift apart silently (tests/oit_rop/
 // test_config.cpp counts each section's fields against the registry).
 #include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/MemorySystem.hpp"
 #include "oit_rop/RepeatedKeys.hpp"
 
 #include <fmt/format.h>
@@ -211,6 +212,11 @@ const std::vector<Property>& registry() {
               "streams in far-apart regions fall in different banks; false = the plain row-bank-column map"),
       real("dram.controller_ns", &R::dram, &DramConfig::controller_ns, 0, false, 100000, "ns",
            "fixed controller + interconnect latency added to every access [inferred]"),
+      real("dram.trefi_ns", &R::dram, &DramConfig::trefi_ns, 0, false, 1000000, "ns",
+           "refresh interval: each channel refreshes all its banks once per tREFI (channels staggered); 0 = no "
+           "refresh"),
+      real("dram.trfc_ns", &R::dram, &DramConfig::trfc_ns, 0, false, 100000, "ns",
+           "refresh cycle time: for tRFC the channel moves no data, and its open rows are closed after it"),
 
       integer("stats.interval_cycles", &R::stats, &StatsConfig::interval_cycles, 1,
               std::numeric_limits<uint64_t>::max(), "cycles", "time-series sample period"),
@@ -505,6 +511,10 @@ void ConfigTree::validate() const {
                                c.dram.burst_bytes, c.dram.interleave_bytes));
   if (c.dram.burst_bytes > c.dram.row_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.row_bytes ({})", c.dram.burst_bytes, c.dram.row_bytes));
+  if (c.dram.trefi_ns > 0 && c.clock.core_mhz > 0 && c.dram.channel_gbps > 0 && c.dram.tck_ns > 0) {
+    const std::string problem = MemorySystem::refreshProblem(c.dram, c.clock.core_mhz);
+    if (!problem.empty()) errs.push_back(problem);
+  }
   if (c.alu.fp32_rate > c.alu.fp16_rate)
     errs.push_back(fmt::format("alu.fp32_rate ({}) > alu.fp16_rate ({}): wider rows cannot blend faster",
                                c.alu.fp32_rate, c.alu.fp16_rate));

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+
+#include <fmt/format.h>
 #include <stdexcept>
 #include <string>
 
@@ -89,10 +91,40 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), 
   map_.pow2 = map_.burst.shift >= 0 && map_.chunk_bursts.shift >= 0 && map_.channel.shift >= 0 &&
               map_.row_bursts.shift >= 0 && map_.bank.shift >= 0;
 
+  if (cfg.trefi_ns > 0) {
+    const std::string problem = refreshProblem(cfg, core_mhz);
+    require(problem.empty(), problem.c_str());
+    refresh_period_ = cyclesToTicks(cfg.trefi_ns * cycles_per_ns, kTickShift);
+    refresh_rfc_ = cyclesToTicks(cfg.trfc_ns * cycles_per_ns, kTickShift);
+    for (unsigned c = 0; c < cfg.channels; ++c) refresh_off_.push_back(refresh_period_ * c / cfg.channels);
+  }
   bus_free_.assign(cfg.channels, 0);
   busy_ticks_.assign(cfg.channels, 0);
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
+}
+
+std::string MemorySystem::refreshProblem(const DramConfig& cfg, double core_mhz) {
+  if (cfg.trefi_ns == 0) return {};
+  if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
+    return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
+  // The longest run of bursts booked as one (open rows: a row, on a bank the
+  // refresh left closed; closed rows: one burst) must fit between two
+  // refreshes: runs are placed whole (MEMORY.md).
+  const double cycles_per_ns = core_mhz / 1000.0;
+  const auto ticks = [&](double ns) { return cyclesToTicks(ns * cycles_per_ns, kTickShift); };
+  const uint64_t cl = ticks(cfg.cl * cfg.tck_ns), trcd = ticks(cfg.trcd * cfg.tck_ns);
+  const uint64_t burst = ticks(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
+  const uint64_t bursts = cfg.burst_bytes ? std::max<uint64_t>(1, cfg.row_bytes / cfg.burst_bytes) : 1;
+  const uint64_t run = cfg.open_row ? trcd + cl + bursts * burst : trcd + cl + burst;
+  const uint64_t period = ticks(cfg.trefi_ns), rfc = ticks(cfg.trfc_ns);
+  if (rfc < period && period - rfc >= run) return {};
+  return fmt::format(
+      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer booked as one, {} "
+      "({:.1f} ns here)",
+      cfg.trefi_ns, cfg.trfc_ns,
+      cfg.open_row ? fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes) : std::string("one burst"),
+      std::ldexp(double(run), -int(kTickShift)) / cycles_per_ns);
 }
 
 double MemorySystem::bytesPerCyclePerChannel() const {
@@ -211,6 +243,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   const Divisor &row_div = map_.row_bursts, &bank_div = map_.bank;
   const bool multi_channel = map_.multi_channel, hash = map_.hash;
   const bool open_row = cfg_.open_row;
+  const bool closed_refresh = !open_row && refresh_period_ != 0;
   const unsigned banks = cfg_.banks;
   const uint64_t cl = cl_ticks_, burst = burst_ticks_;
   const uint64_t &trcd = trcd_ticks_, &trp = trp_ticks_, &tras = tras_ticks_, &act_step = act_step_ticks_;
@@ -256,45 +289,90 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       hi = channel_div.div<Pow2>(kl) * chunk_bursts + chunk_div.mod<Pow2>(b_last);
     }
     while (lb <= hi) {
-      const uint64_t n = std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
+      // (Closed rows with refresh: a run per burst, each with its own activate,
+      // so refreshes fall between bursts; without refresh the closed form of a
+      // run gives the same times.)
+      const uint64_t n = closed_refresh ? 1 : std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
       uint64_t row;
       bankRow<Pow2>(bank_div, hash, row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
       Bank& bank = bank_state[size_t(ch) * banks + bank_no];
-      uint64_t column;  // tick the run's first column command (read or write) issues
-      uint64_t act = 0;  // closed row: the first burst's activate
-      if (open_row) {
-        if (bank.open_row == row) {
-          ++hits;
-          column = std::max(arrive, bank.row_ready);
-        } else {
-          ++misses;
-          // Precharge may start once the open row is active, its transfers ended
-          // and it has been open tRAS.
-          uint64_t start = std::max({arrive, bank.row_ready, bank.last_end});
-          if (bank.open_row != kNoRow) start = std::max(start, bank.act + tras) + trp;
-          bank.open_row = row;
-          bank.act = start;
-          bank.row_ready = start + trcd;
-          column = bank.row_ready;
+      // With refresh the run is placed whole between two refreshes: when it
+      // would meet one, it is placed again after it, on the bank the refresh
+      // left closed (b, a copy, starts from the committed state on every try;
+      // without refresh b is the bank itself: one try).
+      Bank copy;
+      Bank& b = refresh_period_ ? copy : bank;
+      uint64_t earliest = arrive;   // no command of the run before this
+      uint64_t column;              // tick the run's first column command (read or write) issues
+      uint64_t act = 0;             // closed row: the first burst's activate
+      uint64_t xfer, last_xfer, second_xfer, run_hits, run_misses;
+      bool refreshed = false;       // a refresh closed the bank's row
+      for (unsigned tries = 0;; ++tries) {
+        uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
+        if (refresh_period_) {
+          if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
+          b = bank;
+          // A refresh since the row was opened closed it.
+          if (open_row && b.open_row != kNoRow) {
+            const uint64_t w = lastRefreshStart(ch, std::max(earliest, b.row_ready));
+            if (w > b.act) {
+              refreshed = true;
+              earliest = std::max(earliest, w + refresh_rfc_);
+            }
+          }
+          if (refreshed) b.open_row = kNoRow;
         }
-        hits += n - 1;
-      } else {
-        misses += n;  // every access activates its row
-        act = std::max(arrive, bank.act_ready);
-        column = act + trcd;
+        if (open_row) {
+          if (b.open_row == row) {
+            run_hits = n;
+            run_misses = 0;
+            column = std::max(earliest, b.row_ready);
+            first_cmd = column;
+          } else {
+            run_hits = n - 1;
+            run_misses = 1;
+            // Precharge may start once the open row is active, its transfers ended
+            // and it has been open tRAS.
+            uint64_t start = std::max({earliest, b.row_ready, b.last_end});
+            first_cmd = start;
+            if (b.open_row != kNoRow) {
+              first_cmd = std::max(start, b.act + tras);
+              start = first_cmd + trp;
+            }
+            b.open_row = row;
+            b.act = start;
+            b.row_ready = start + trcd;
+            column = b.row_ready;
+          }
+        } else {
+          run_hits = 0;
+          run_misses = n;  // every access activates its row
+          act = std::max(earliest, b.act_ready);
+          column = act + trcd;
+          first_cmd = act;
+        }
+        xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
+        last_xfer = xfer;
+        second_xfer = 0;
+        if (open_row) {
+          last_xfer = xfer + (n - 1) * burst;
+        } else if (n > 1) {
+          const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
+          second_xfer = act1 + trcd + cl;
+          act = act1 + (n - 2) * act_step;  // the run's last activate
+          last_xfer = act + trcd + cl;
+        }
+        if (!refresh_period_) break;
+        const uint64_t after = refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
+        if (!after) break;
+        earliest = after;
+        refreshed = true;
       }
-      const uint64_t xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-      uint64_t last_xfer = xfer, second_xfer = 0;
-      if (open_row) {
-        last_xfer = xfer + (n - 1) * burst;
-      } else if (n > 1) {
-        const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
-        second_xfer = act1 + trcd + cl;
-        act = act1 + (n - 2) * act_step;  // the run's last activate
-        last_xfer = act + trcd + cl;
-      }
+      if (refresh_period_) bank = b;
+      hits += run_hits;
+      misses += run_misses;
       const uint64_t end = last_xfer + burst;
       bus_free[ch] = end;
       if (sample_interval_) {

@@ -8,8 +8,10 @@
 // may interleave slightly out of order, which the model tolerates.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "oit_rop/RopConfig.hpp"
@@ -48,6 +50,9 @@ class MemorySystem {
   void coarsenSamples();
   // Peak bytes per core cycle the channels can move together.
   double peakBytesPerCycle() const;
+  // "" when dram.trefi_ns / trfc_ns are usable at core_mhz, else what is wrong
+  // (the time between two refreshes must hold one row's transfer, MEMORY.md).
+  static std::string refreshProblem(const DramConfig& cfg, double core_mhz);
 
   // Added accessors (derived timing, for tests, reports and callers that
   // want the unloaded latency). Cycles are the exact fractional values the
@@ -121,6 +126,21 @@ class MemorySystem {
   // access() after its checks and byte counts; Pow2 = map_.pow2.
   template <bool Pow2>
   Cycle book(Cycle now, uint64_t addr, uint32_t bytes);
+  // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
+  // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /
+  // channels (staggered). Start of the latest window at or before t (0: none);
+  // end of the first window meeting [from, end) (0: none).
+  uint64_t lastRefreshStart(unsigned ch, uint64_t t) const {
+    const uint64_t off = refresh_off_[ch];
+    if (t < off + refresh_period_) return 0;
+    return off + (t - off) / refresh_period_ * refresh_period_;
+  }
+  uint64_t refreshOverlapEnd(unsigned ch, uint64_t from, uint64_t end) const {
+    const uint64_t off = refresh_off_[ch];
+    uint64_t w = off + std::max<uint64_t>(1, from > off ? (from - off) / refresh_period_ : 0) * refresh_period_;
+    if (w + refresh_rfc_ <= from) w += refresh_period_;
+    return w < end ? w + refresh_rfc_ : 0;
+  }
   // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to
   // bus_bytes_per_interval (bucket of each burst's start cycle).
   void sampleBursts(uint64_t xfer, uint64_t n, uint64_t step);
@@ -129,6 +149,8 @@ class MemorySystem {
   double core_mhz_ = 0;
   uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, tras_ticks_ = 0, burst_ticks_ = 0;
   uint64_t act_step_ticks_ = 0;  // closed row: max(tRCD + CL + burst, tRAS) + tRP
+  uint64_t refresh_period_ = 0, refresh_rfc_ = 0;  // ticks; period 0: no refresh
+  std::vector<uint64_t> refresh_off_;              // ticks, per channel
   AddressMap map_;
   std::vector<uint64_t> bus_free_;    // ticks, per channel
   std::vector<uint64_t> busy_ticks_;  // ticks, per channel

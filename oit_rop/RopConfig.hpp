@@ -82,6 +82,8 @@ struct DramConfig {
   bool open_row = true;             // keep rows open (hits pay CL only)
   bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
+  double trefi_ns = 0.0;            // refresh interval per channel (0: no refresh)
+  double trfc_ns = 0.0;             // refresh cycle time: no data moves, rows close
   bool operator==(const DramConfig&) const = default;
 };
 

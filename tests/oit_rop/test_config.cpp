@@ -76,8 +76,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 14u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 49u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 16u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 51u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -108,6 +108,25 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_NE(get("alu.fp16_rate").description.find("[inferred]"), std::string::npos);
   EXPECT_TRUE(get("alu.fp16_rate").inferred);
   EXPECT_FALSE(get("clock.core_mhz").inferred);
+}
+
+// DRAM refresh is off in both presets; a refresh gap that cannot hold one
+// row's transfer is refused by validate(), naming both properties.
+TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
+  for (const std::string& preset : presetNames()) EXPECT_EQ(ConfigTree::forPreset(preset).config().dram.trefi_ns, 0.0);
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  t.set("dram.trefi_ns", "7800");
+  t.set("dram.trfc_ns", "350");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.trefi_ns", "1000");
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.trefi_ns (1000 ns) minus dram.trfc_ns (350 ns) must be at least the longest transfer booked "
+                   "as one, a row of 8192 bytes on a closed bank (667.5 ns here)"),
+            std::string::npos)
+      << e;
+  t.set("dram.trfc_ns", "0");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.trefi_ns > 0 needs dram.trfc_ns > 0"), std::string::npos) << e;
 }
 
 TEST(ConfigTree, PresetNames) {

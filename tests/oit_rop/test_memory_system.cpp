@@ -676,6 +676,124 @@ TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
   EXPECT_EQ(cases, 9 * 2 * 2 * 4);
 }
 
+// ---- Refresh (dram.trefi_ns / trfc_ns) on the round configuration ----
+// One channel, tREFI 1000 cycles, tRFC 100: windows [1000, 1100), [2000, 2100) ...
+DramConfig refreshConfig(unsigned channels) {
+  DramConfig c = roundConfig(channels);
+  c.trefi_ns = 1000;
+  c.trfc_ns = 100;
+  return c;
+}
+
+TEST(MemorySystem, RefreshIsOffByDefaultAndLeavesEarlierTimes) {
+  EXPECT_EQ(DramConfig{}.trefi_ns, 0.0);
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  // Before the first window nothing changes: closed bank, then a row hit.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);   // 66
+  EXPECT_EQ(m.access(900, 64, 64, false, Surface::Depth), 900 + kCtrl + kCl + kBurst);  // 955, ends before 1000
+  EXPECT_EQ(m.stats().row_hits, 1u);
+}
+
+TEST(MemorySystem, ARunMeetingARefreshWaitsForItsEndOnAClosedRow) {
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), 66u);  // row 0 of bank 0 open
+  // A row hit at 950 would put its data on the bus at 1001-1005, inside the
+  // window [1000, 1100): it waits for the window's end, and the refresh closed
+  // the row: activate at 1100, data at 1100 + tRCD + CL, done 4 cycles later.
+  EXPECT_EQ(m.access(950, 64, 64, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
+  EXPECT_EQ(m.stats().row_hits, 0u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);  // the window is not busy time
+}
+
+TEST(MemorySystem, ARefreshBetweenTwoAccessesClosesTheRowWithoutAPrecharge) {
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), 66u);
+  // After the window: the row is closed (a miss), but the refresh precharged
+  // the bank: tRCD + CL, no tRP.
+  EXPECT_EQ(m.access(1200, 64, 64, false, Surface::Depth), 1200 + kCtrl + kTrcd + kCl + kBurst);
+  // Opened after the window: the next access hits.
+  EXPECT_EQ(m.access(1300, 128, 64, false, Surface::Depth), 1300 + kCtrl + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 1u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  // A request arriving inside a window waits for its end.
+  EXPECT_EQ(m.access(1950, 192, 64, false, Surface::Depth), 2100 + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, RefreshWindowsAreStaggeredOverChannels) {
+  // Two channels: channel 0 refreshes at 1000, 2000 ..., channel 1 at 1500, 2500 ...
+  MemorySystem m(refreshConfig(2), kRoundMhz);
+  ASSERT_EQ(m.channelOf(0), 0u);
+  ASSERT_EQ(m.channelOf(256), 1u);
+  // At 1450 on channel 0: activate 1490, data 1512-1516, between its windows.
+  EXPECT_EQ(m.access(1450, 0, 64, false, Surface::Depth), 1450 + kCtrl + kTrcd + kCl + kBurst);
+  // The same on channel 1 meets its window [1500, 1600).
+  EXPECT_EQ(m.access(1450, 256, 64, false, Surface::Depth), 1600 + kTrcd + kCl + kBurst);
+}
+
+// A stream of B bytes takes at least B / bandwidth / (1 - tRFC / tREFI), and
+// at most that with every window also costing a re-activation and one burst.
+TEST(MemorySystem, RefreshTakesItsShareOfTheBandwidth) {
+  constexpr uint64_t kBursts = 4096;
+  const auto streamEnd = [&](const DramConfig& c) {
+    MemorySystem m(c, kRoundMhz);
+    Cycle done = 0;
+    for (uint64_t i = 0; i < kBursts; ++i) done = std::max(done, m.access(0, i * 64, 64, false, Surface::BlendArrays));
+    EXPECT_EQ(m.stats().channel_busy[0], kBursts * kBurst);
+    return done;
+  };
+  const double busy = double(kBursts * kBurst);  // 16,384 cycles of data
+  const Cycle plain = streamEnd(roundConfig(1));
+  EXPECT_LE(plain, Cycle(busy) + kCtrl + kTrcd + kCl + 64);
+  const Cycle refreshed = streamEnd(refreshConfig(1));
+  const double period = 1000, rfc = 100, per_window = rfc + kTrcd + kCl + kBurst;
+  EXPECT_GE(double(refreshed), busy * period / (period - rfc));                  // >= 18,204
+  EXPECT_LE(double(refreshed), busy * period / (period - per_window) + period);  // <= 19,746
+}
+
+// Closed rows: every burst activates its own row, so with refresh a request's
+// bursts are placed one by one and a window falls between two of them.
+TEST(MemorySystem, ClosedRowBurstsOfOneRequestStraddleARefresh) {
+  DramConfig c = refreshConfig(1);
+  c.open_row = false;
+  DramConfig plain = c;
+  plain.trefi_ns = plain.trfc_ns = 0;
+  // Two bursts at 930: the first activates at 970 and ends at 996; the second
+  // could activate at 996 + tRP = 1007, inside [1000, 1100): it activates at 1100.
+  MemorySystem m(c, kRoundMhz), p(plain, kRoundMhz);
+  EXPECT_EQ(p.access(930, 0, 128, false, Surface::Depth), 1007 + kTrcd + kCl + kBurst);  // 1033 without refresh
+  EXPECT_EQ(m.access(930, 0, 128, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);
+}
+
+TEST(MemorySystem, RefusesRefreshGapsShorterThanARow) {
+  DramConfig c = refreshConfig(1);
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
+  // Open row: a row of 128 bursts on a closed bank takes tRCD + CL + 512 = 534 cycles.
+  c.trfc_ns = 1000 - 534;
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
+  c.trfc_ns = 1000 - 533;
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
+            "dram.trefi_ns (1000 ns) minus dram.trfc_ns (467 ns) must be at least the longest transfer booked as "
+            "one, a row of 8192 bytes on a closed bank (534.0 ns here)");
+  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  c = refreshConfig(1);
+  c.trfc_ns = 0;
+  EXPECT_NE(MemorySystem::refreshProblem(c, kRoundMhz).find("needs dram.trfc_ns > 0"), std::string::npos);
+  c.trefi_ns = 0;  // no refresh: tRFC is not used
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
+  // Closed rows place one burst at a time: tRCD + CL + a burst = 26 cycles.
+  c = refreshConfig(1);
+  c.open_row = false;
+  c.trfc_ns = 1000 - 26;
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
+  c.trfc_ns = 1000 - 25;
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
+            "dram.trefi_ns (1000 ns) minus dram.trfc_ns (975 ns) must be at least the longest transfer booked as "
+            "one, one burst (26.0 ns here)");
+}
+
 TEST(MemorySystem, RejectsInvalidGeometry) {
   DramConfig c = roundConfig(1);
   c.interleave_bytes = 96;  // not a multiple of the burst
