@@ -1,6 +1,7 @@
 // DRAM model: expectations are derived by hand from the formulas in
 // oit_rop/MEMORY.md, mostly on a "round" configuration where every timing is a
 // whole number of core cycles (1000 MHz core, tCK 1 ns, 16 B per cycle).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -768,30 +769,32 @@ TEST(MemorySystem, ClosedRowBurstsOfOneRequestStraddleARefresh) {
 }
 
 TEST(MemorySystem, RefusesRefreshGapsShorterThanARow) {
+  EXPECT_EQ(MemorySystem::refreshProblem(refreshConfig(1), kRoundMhz), "");
+  // The longest run booked as one must fit in tREFI - tRFC. Open rows: a row of
+  // 128 bursts on a closed bank, tRCD + CL + 512 = 534 cycles; closed rows place
+  // one burst at a time: tRCD + CL + 4 = 26.
+  struct Case {
+    bool open_row;
+    unsigned run;
+    const char* what;
+  };
+  for (const Case& k : {Case{true, 534, "a row of 8192 bytes on a closed bank"}, Case{false, 26, "one burst"}}) {
+    DramConfig c = refreshConfig(1);
+    c.open_row = k.open_row;
+    c.trfc_ns = 1000 - k.run;
+    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "") << k.what;
+    c.trfc_ns = 1000 - k.run + 1;
+    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
+              fmt::format("dram.trefi_ns (1000 ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer "
+                          "booked as one, {} ({}.0 ns here)",
+                          1000 - k.run + 1, k.what, k.run));
+    EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  }
   DramConfig c = refreshConfig(1);
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
-  // Open row: a row of 128 bursts on a closed bank takes tRCD + CL + 512 = 534 cycles.
-  c.trfc_ns = 1000 - 534;
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
-  c.trfc_ns = 1000 - 533;
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
-            "dram.trefi_ns (1000 ns) minus dram.trfc_ns (467 ns) must be at least the longest transfer booked as "
-            "one, a row of 8192 bytes on a closed bank (534.0 ns here)");
-  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
-  c = refreshConfig(1);
   c.trfc_ns = 0;
   EXPECT_NE(MemorySystem::refreshProblem(c, kRoundMhz).find("needs dram.trfc_ns > 0"), std::string::npos);
   c.trefi_ns = 0;  // no refresh: tRFC is not used
   EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
-  // Closed rows place one burst at a time: tRCD + CL + a burst = 26 cycles.
-  c = refreshConfig(1);
-  c.open_row = false;
-  c.trfc_ns = 1000 - 26;
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
-  c.trfc_ns = 1000 - 25;
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
-            "dram.trefi_ns (1000 ns) minus dram.trfc_ns (975 ns) must be at least the longest transfer booked as "
-            "one, one burst (26.0 ns here)");
 }
 
 TEST(MemorySystem, RejectsInvalidGeometry) {
