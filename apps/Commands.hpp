@@ -26,8 +26,9 @@ void addReportCommand(CLI::App& app);  // oitsim report DIR -> DIR/report.html
 // CLI11 2.1 reads an unsigned option with strtoull: "-5" wraps around and a
 // value past 2^64 - 1 saturates, both silently. unsignedText() takes digits
 // only ("expected a non-negative integer, got 'abc'"); main() adds it to every
-// unsigned option. unsignedRange(): that first, then CLI::Range(lo, hi), for
-// options with a range (a range check alone says "Value abc not in range").
+// unsigned option. unsignedRange(lo, hi): the same check, then the range, as
+// one validator, for options with a range (CLI::Range alone, which runs before
+// main()'s check, said "Value abc not in range").
 CLI::Validator unsignedText();
 CLI::Validator unsignedRange(uint64_t lo, uint64_t hi);
 

@@ -36,7 +36,7 @@ extern "C" int sc_main(int argc, char* argv[]) {
   oit::cli::addSweepCommand(app);
   oit::cli::addReportCommand(app);
   // Unsigned options take digits only (unsignedText()); options with a range
-  // check it first, so the range sees a number.
+  // already check the digits in their unsignedRange().
   const CLI::Validator unsigned_text = oit::cli::unsignedText();
   for (CLI::App* sub : app.get_subcommands({}))
     for (CLI::Option* o : sub->get_options())

@@ -65,8 +65,9 @@ struct InRec {
   uint32_t tile;
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;
-  uint8_t outcome;       // model::InsertOutcome
-  uint16_t prim_offset;  // seq - first seq of its primitive's run (a run restarts every 65536 records)
+  uint8_t outcome;  // model::InsertOutcome
+  // seq - first seq of its primitive's run (restarts every 65536 records; 0 when the lock does not group)
+  uint16_t prim_offset;
 };
 
 struct DrawCounts {
