@@ -57,6 +57,15 @@ class BlendAlu {
     stats_.blends += !drop;
     stats_.rows += drop ? 0u : rows;
   }
+  // The approximate engine's visit: counts one blend (or drop) like issue(),
+  // without the completion queue; returns its latency.
+  unsigned count(unsigned rows, bool drop) {
+    rows = std::min(rows, rows_max_);
+    stats_.dropped += drop;
+    stats_.blends += !drop;
+    stats_.rows += drop ? 0u : rows;
+    return latency(rows);
+  }
   // Calls f(token) for each blend finishing at `now`.
   template <class F>
   void complete(Cycle now, F&& f) {

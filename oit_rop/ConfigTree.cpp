@@ -235,6 +235,11 @@ const std::vector<Property>& registry() {
       integer("sim.quantum_cycles", &R::sim, &SimConfig::quantum_cycles, 1, 1000000000, "cycles",
               "tlm_quantumkeeper quantum: partitions may run this far apart, which changes how their DRAM "
               "requests interleave (1 = lockstep; DESIGN.md)"),
+      enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},
+                  "cycle: every stage evaluated on each cycle where one can move (the reference); approximate "
+                  "(experimental): each fragment visited once, its stage times computed from the resources' free "
+                  "times; about 2x faster, same image and counts, frame cycles +1 to +6 % on DRAM-bound "
+                  "configurations but up to +87 % when the blend ALU limits (DESIGN.md)"),
   };
   return props;
 }

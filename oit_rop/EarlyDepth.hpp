@@ -45,6 +45,17 @@ class EarlyDepth {
     last_ready_ = ready;
     q_.push({token, ready, passed});
   }
+  // The approximate engine's visit (no queue, no order): the cycle the fragment
+  // arriving at `now` may leave, counted like push().
+  Cycle test(Cycle now, uint32_t tile, bool needs_read) {
+    ++stats_.tested;
+    Cycle ready = now + cfg_.latency;
+    if (needs_read)
+      ready = std::max(ready, depthTile(now, tile));
+    else
+      ++stats_.hiz_decided;
+    return ready;
+  }
   // Calls f(token) for each fragment leaving the stage at `now` (in order).
   template <class F>
   unsigned leave(Cycle now, F&& f) {

@@ -80,9 +80,9 @@ void OitRop::sampler() {
     s.cycle = c;
     s.dram_bytes = bucket < bus.size() ? bus[bucket] : 0;
     for (unsigned i = 0; i < parts_.size(); ++i) {
-      tr_occupancy_[i] = parts_[i]->lock().occupancy();
+      tr_occupancy_[i] = parts_[i]->occupancy();
       s.occupancy += tr_occupancy_[i];
-      s.lock_waiters += parts_[i]->lock().waiting();
+      s.lock_waiters += parts_[i]->lockWaiters();
     }
     tr_dram_bytes_ = s.dram_bytes;
     tr_interval_ = interval_;

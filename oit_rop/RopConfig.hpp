@@ -12,6 +12,8 @@ namespace oit::rop {
 enum class LockGranularity : uint8_t { Pixel, Quad, Tile };  // quad = 2x2 pixels
 enum class LockRelease : uint8_t { EndOfBlend, EndOfShader };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
+// cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
+enum class SimEngine : uint8_t { CycleStepped, Approximate };
 
 struct ClockConfig {
   double core_mhz = 1150.0;  // ROP / core clock
@@ -103,6 +105,7 @@ struct SkipConfig {
 
 struct SimConfig {
   uint64_t quantum_cycles = 200;  // tlm_quantumkeeper quantum (within ~1 % of lockstep: DESIGN.md)
+  SimEngine engine = SimEngine::CycleStepped;
   bool operator==(const SimConfig&) const = default;
 };
 

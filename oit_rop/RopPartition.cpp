@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 namespace oit::rop {
@@ -45,6 +46,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   payload_.set_data_ptr(dummy_data);
   node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
   for (size_t i = 0; i < kStageCount; ++i) codes_ |= uint64_t(code(status_[i])) << (8 * i);
+  approximate_ = cfg_.sim.engine == SimEngine::Approximate;
   SC_THREAD(run);
 }
 
@@ -372,6 +374,157 @@ Cycle RopPartition::nextEvent(bool refused, bool sb_full, bool draining) {
   return next;
 }
 
+namespace {
+// Min-heap of cycles (std heap with greater<>): front() is the earliest.
+void heapPush(std::vector<Cycle>& h, Cycle c) {
+  h.push_back(c);
+  std::push_heap(h.begin(), h.end(), std::greater<Cycle>());
+}
+Cycle heapPop(std::vector<Cycle>& h) {
+  std::pop_heap(h.begin(), h.end(), std::greater<Cycle>());
+  const Cycle c = h.back();
+  h.pop_back();
+  return c;
+}
+}  // namespace
+
+void RopPartition::approximatePhase() {
+  // One visit per fragment in issue order (= submission order within the
+  // partition). Each stage's time follows from when the fragment reaches it
+  // and when the resource it needs is free: scoreboard entry (earliest
+  // release among those in flight), shader latency (the same draw as the
+  // cycle engine), depth tile (EarlyDepth's buffer and DRAM), lock address
+  // (ReleaseTable), cache line (BlendArrayCache and DRAM), blend slot (ALU
+  // throughput, in issue order). Differences from the cycle engine: DESIGN.md.
+  constexpr unsigned kShift = RateLimiter::kShift;
+  constexpr int64_t kOne = RateLimiter::kOne;
+  flushAccounts();  // every stage idle up to here; the timelines account the phase
+  const Cycle start = now_;
+  std::array<StageTimeline, 5> tl;
+  tl.fill(StageTimeline(start));
+  StageCycles* acc = res_.accounts.stage.data();
+  constexpr StageStatus kBusy = StageStatus::busy();
+  const bool grouped = cfg_.lock.per_primitive && cfg_.lock.granularity != LockGranularity::Pixel;
+  ReleaseTable locks(owned_.size() * geo_.lock_per_tile, grouped);
+  const unsigned cap = cfg_.lock.capacity;
+  approx_sb_.clear();
+  approx_sb_.reserve(cap + 1);
+  approx_waiting_.clear();
+  // Issue and blend slots in 1/kOne cycles (rates need not be integers).
+  const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / cfg_.input.fragments_per_clock));
+  const double alu_rate = std::max(1e-6, double(cfg_.alu.blends_per_clock) * s_.format_rate);
+  const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
+  int64_t issue_fx = int64_t(now_) << kShift, alu_fx = 0;
+  const Cycle tail = cfg_.lock.release == LockRelease::EndOfShader ? cfg_.lock.shader_tail : 0;
+  Cycle last_release = now_, last_finish = now_;
+  StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
+  auto& q = front_.queue(id_);
+  for (;;) {
+    if (q.empty()) {
+      refillInput();
+      if (q.empty()) {
+        if (!starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", id_));
+        waitForFrontEnd();
+        issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
+        gap0 = StageStatus::stall(Stall::InputStarved);
+        continue;
+      }
+    }
+    const InRec r = q.front();  // a copy: advance() lets other partitions refill (and grow) the queue
+    if (r.flags & InRec::kPassEnd) {
+      // Pass p+1 starts after pass p drained.
+      q.pop();
+      if (last_release > now_) advance(last_release, false);
+      issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
+      approx_sb_.clear();
+      approx_waiting_.clear();
+      res_.pass_end.push_back(now_);
+      gap0 = StageStatus::idle();
+      if (++pass_ == front_.passes()) break;
+      continue;
+    }
+    // Scoreboard entry: when every one is in use, the earliest release frees one.
+    int64_t fx = issue_fx;
+    if (approx_sb_.size() >= cap) {
+      const int64_t freed = int64_t(heapPop(approx_sb_)) << kShift;
+      if (freed > fx) {
+        fx = freed;
+        gap0 = StageStatus::stall(Stall::ScoreboardFull);
+      }
+    }
+    const Cycle issue = Cycle(fx >> kShift);
+    issue_fx = fx + in_step;
+    if (issue > now_) advance(issue, false);
+    while (!approx_sb_.empty() && approx_sb_.front() <= now_) heapPop(approx_sb_);
+    while (!approx_waiting_.empty() && approx_waiting_.front() <= now_) heapPop(approx_waiting_);
+    tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
+    gap0 = kBusy;
+
+    const bool culled = (r.flags & InRec::kCulled) != 0;
+    res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & merge_skip_);
+    const Cycle finish = issue + shader_.latency(r.seq, pass_);
+    last_finish = std::max(last_finish, finish);
+    const Cycle passed = finish + cfg_.early_depth.latency;
+    const Cycle early = early_.test(finish, r.tile, (r.flags & InRec::kNeedsDepthRead) != 0);
+    tl[1].add(acc[1], finish, passed, kBusy);
+    if (early > passed) tl[1].add(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
+    Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
+    if (culled && early_cull_) {
+      ++res_.culled_early;
+    } else {
+      LockStats& ls = approx_lock_;
+      ++ls.arrivals;
+      ++ls.entries;
+      const Cycle free = locks.enterAfter(r.lock, r.seq - r.prim_offset);
+      Cycle enter = early;
+      if (free > early) {
+        ++ls.conflicts;
+        ls.wait_cycles += free - early;
+        ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
+        enter = free;
+        heapPush(approx_waiting_, enter);
+      }
+      tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
+      const bool write = !culled && r.outcome != uint8_t(model::InsertOutcome::Discarded);
+      const Cycle lock_enter = enter;
+      Cycle ready = cache_.acquire(enter, r.tile, write);
+      while (ready == kNever) {  // the miss queue is full: retry when its first entry frees
+        if (cache_.refusedBySet())  // lines are pinned only during a visit
+          throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", id_));
+        enter = std::max(enter + 1, cache_.missQueueFreesAt());
+        ready = cache_.acquire(enter, r.tile, write);
+      }
+      cache_.release(r.tile);
+      if (enter > lock_enter) tl[2].add(acc[2], lock_enter, enter, StageStatus::stall(Stall::CacheMissWait));
+      tl[2].add(acc[2], enter, enter + 1, kBusy);
+      const bool miss = ready > enter + cfg_.cache.hit_latency;
+      tl[3].add(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
+      const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
+      alu_fx = slot + alu_step;
+      const Cycle at = Cycle(slot >> kShift);
+      if (at > ready) tl[3].add(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
+      res_.culled_late += culled;
+      const Cycle done = at + alu_.count(culled ? 0u : rows_of_[r.outcome & 3], culled);
+      tl[4].add(acc[4], at, done, kBusy);
+      if (!s_.bounded && !culled && r.outcome == uint8_t(model::InsertOutcome::Stored)) nodeWrite();
+      release = done + tail;
+      locks.released(r.lock, release);
+    }
+    last_release = std::max(last_release, release);
+    heapPush(approx_sb_, release);
+    approx_lock_.peak_occupancy = std::max(approx_lock_.peak_occupancy, uint32_t(approx_sb_.size()));
+    q.pop();
+    front_.popped(id_);
+    ++res_.fragments;
+  }
+  // Shader busy until the last fragment left it; then every stage idle to the drain.
+  tl[0].add(acc[0], tl[0].cursor(), last_finish, kBusy);
+  for (unsigned i = 0; i < tl.size(); ++i) tl[i].close(acc[i], now_, StageStatus::idle());
+  for (size_t i = 0; i < tl.size(); ++i) since_[i] = now_;  // (Resolve: idle through the phase, as before)
+  approx_sb_.clear();
+  approx_waiting_.clear();
+}
+
 void RopPartition::waitForFrontEnd() {
   // Another partition's backlog is at the high watermark: wait until it drains.
   advance(now_ + 1, true);
@@ -491,8 +644,11 @@ void RopPartition::resolvePhase() {
 void RopPartition::run() {
   opaquePhase();
   res_.opaque_end = now_;
-  while (transparentStep()) {
-  }
+  if (approximate_)
+    approximatePhase();
+  else
+    while (transparentStep()) {
+    }
   resolvePhase();
   flushAccounts();
   res_.end = now_;

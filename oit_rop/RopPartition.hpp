@@ -3,7 +3,9 @@
 // BlendAlu, then Resolve) advanced cycle by cycle by ONE SC_THREAD with a
 // tlm_quantumkeeper; when no stage can move, the thread jumps to the next
 // cycle at which one can (skip.idle_cycles), and the skipped span keeps every
-// stage's status (busy / stall cause / idle) for the accounting.
+// stage's status (busy / stall cause / idle) for the accounting. With
+// sim.engine = approximate the transparent phase visits each fragment once
+// instead (approximatePhase, DESIGN.md).
 //
 // Frame: opaque phase (depth + colour of the opaque pre-pass, charged as
 // traffic and input time), then every algorithm pass (pass p+1 after this
@@ -18,6 +20,7 @@
 #include <memory>
 #include <vector>
 
+#include "oit_rop/ApproximateTiming.hpp"
 #include "oit_rop/BlendAlu.hpp"
 #include "oit_rop/BlendArrayCache.hpp"
 #include "oit_rop/DramSystem.hpp"
@@ -71,6 +74,12 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   sc_core::sc_event& doneEvent() { return done_event_; }
   const PartitionResult& result() const { return res_; }
   const PixelLock& lock() const { return lock_; }
+  // The lock's figures, from the PixelLock or (sim.engine = approximate) the
+  // approximate engine; scoreboard entries in use and fragments waiting for
+  // the lock at the partition's current cycle (the sampler's values).
+  const LockStats& lockStats() const { return approximate_ ? approx_lock_ : lock_.stats(); }
+  uint32_t occupancy() const { return approximate_ ? uint32_t(approx_sb_.size()) : lock_.occupancy(); }
+  uint32_t lockWaiters() const { return approximate_ ? uint32_t(approx_waiting_.size()) : uint32_t(lock_.waiting()); }
   const BlendArrayCache& cache() const { return cache_; }
   const EarlyDepth& earlyDepth() const { return early_; }
   const BlendAlu& alu() const { return alu_; }
@@ -113,6 +122,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   void flushAccounts();  // accounts every stage's current status up to now_
   void opaquePhase();
   bool transparentStep();  // one cycle; false when every pass drained
+  void approximatePhase();  // every pass, one visit per fragment (sim.engine = approximate)
   Cycle nextEvent(bool refused, bool sb_full, bool draining);
   void waitForFrontEnd();
   void resolvePhase();
@@ -158,6 +168,11 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   uint64_t node_pending_ = 0, node_addr_ = 0;
   Cycle last_write_done_ = 0;
   bool done_ = false;
+  // Approximate engine: releases of the fragments in flight and lock-entry
+  // cycles of those waiting for the lock (min-heaps), and its lock figures.
+  bool approximate_ = false;
+  std::vector<Cycle> approx_sb_, approx_waiting_;
+  LockStats approx_lock_;
   sc_core::sc_event done_event_;
   PartitionResult res_;
 };

@@ -28,14 +28,15 @@ class ShaderInput {
   unsigned slots(Cycle now) { return rate_.available(now); }
   void issue(Cycle now, uint32_t token, uint64_t seq, unsigned pass) {  // inline: once per fragment
     rate_.take();
-    unsigned lat = fixed_lat_;
-    if (!fixed_) {
-      // latencyOf() with the per-pass half of the hash computed once per pass.
-      if (pass != mix_pass_) newPass(pass);
-      lat = std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ (seq >> warp_shift_)))));
-    }
-    wheel_.schedule(now + lat, token);
+    wheel_.schedule(now + latency(seq, pass), token);
     ++issued_;
+  }
+  // latencyOf() with the per-pass half of the hash computed once per pass
+  // (inline: once per fragment).
+  unsigned latency(uint64_t seq, unsigned pass) {
+    if (fixed_) return fixed_lat_;
+    if (pass != mix_pass_) newPass(pass);
+    return std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ (seq >> warp_shift_)))));
   }
   static uint64_t mix64(uint64_t z) {  // splitmix64 finaliser
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;

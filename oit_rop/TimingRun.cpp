@@ -201,7 +201,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     }
     parts.push_back({{"end_cycle", r.end}, {"opaque_end_cycle", r.opaque_end}, {"pass_end_cycles", r.pass_end},
                      {"fragments", r.fragments}, {"stages", stages},
-                     {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lock().stats().peak_occupancy}});
+                     {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lockStats().peak_occupancy}});
     part_frags.push_back(r.fragments);
     skipped += r.skipped_idle;
     culled_early += r.culled_early;
@@ -211,7 +211,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     merges_skipped += r.merges_skipped;
     node_w += r.node_bytes_written;
     node_r += r.node_bytes_read;
-    const LockStats& l = p.lock().stats();
+    const LockStats& l = p.lockStats();
     lock.arrivals += l.arrivals;
     lock.conflicts += l.conflicts;
     lock.wait_cycles += l.wait_cycles;

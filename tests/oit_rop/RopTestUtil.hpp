@@ -135,6 +135,14 @@ inline RopConfig smallConfig() {
   return c;
 }
 
+// Every algorithm's name, for tests instantiated over all of them (paramName names each case).
+inline std::vector<std::string> allAlgorithmNames() {
+  std::vector<std::string> v;
+  for (const auto& a : model::algorithmNames()) v.emplace_back(a.name);
+  return v;
+}
+inline std::string paramName(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
+
 inline TimingResult timed(const std::string& algo, const model::AlgorithmParams& p, const std::vector<Fragment>& fs,
                           uint32_t w, uint32_t h, const RopConfig& cfg, TimingOptions opt = {}) {
   model::MemorySource src(model::testutil::header(w, h), fs, 333);

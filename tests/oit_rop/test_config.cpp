@@ -77,7 +77,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 16u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 51u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 52u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {

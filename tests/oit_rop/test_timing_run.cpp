@@ -111,14 +111,7 @@ TEST_P(EveryAlgorithm, ImageBitIdenticalToFunctionalAlsoWithEverySkipOff) {
   EXPECT_GE(off["timing"]["cycles"].get<uint64_t>(), on["timing"]["cycles"].get<uint64_t>());
 }
 
-std::vector<std::string> allNames() {
-  std::vector<std::string> v;
-  for (const auto& a : model::algorithmNames()) v.emplace_back(a.name);
-  return v;
-}
-
-INSTANTIATE_TEST_SUITE_P(TimingRun, EveryAlgorithm, ::testing::ValuesIn(allNames()),
-                         [](const auto& param_info) { return param_info.param; });
+INSTANTIATE_TEST_SUITE_P(TimingRun, EveryAlgorithm, ::testing::ValuesIn(allAlgorithmNames()), paramName);
 
 TEST(TimingRun, DeterministicStats) {
   const auto fs = smallScene(W, H, 8, 5);
