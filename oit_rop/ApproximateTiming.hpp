@@ -69,7 +69,6 @@ class ReleaseTable {
   }
   // The fragment last asked about at `address` releases it at `release`.
   void released(uint32_t address, Cycle release) { last_[address] = std::max(last_[address], release); }
-  size_t size() const { return last_.size(); }
 
  private:
   static constexpr uint32_t kNoOwner = ~uint32_t(0);

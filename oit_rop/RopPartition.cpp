@@ -518,9 +518,11 @@ void RopPartition::approximatePhase() {
     ++res_.fragments;
   }
   // Shader busy until the last fragment left it; then every stage idle to the drain.
-  tl[0].add(acc[0], tl[0].cursor(), last_finish, kBusy);
-  for (unsigned i = 0; i < tl.size(); ++i) tl[i].close(acc[i], now_, StageStatus::idle());
-  for (size_t i = 0; i < tl.size(); ++i) since_[i] = now_;  // (Resolve: idle through the phase, as before)
+  tl[0].close(acc[0], last_finish, kBusy);
+  for (size_t i = 0; i < tl.size(); ++i) {
+    tl[i].close(acc[i], now_, StageStatus::idle());
+    since_[i] = now_;  // (Resolve: idle through the phase, as before)
+  }
   approx_sb_.clear();
   approx_waiting_.clear();
 }
