@@ -62,21 +62,20 @@ class BlendArrayCache {
     const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
     if (index == kInvalid) [[unlikely]]
       return miss(now, tile, write);  // also throws std::out_of_range for a bad tile
-    Line& line = lines_[index];
-    ++stats_.accesses;
-    ++stats_.hits;
-    line.stamp = ++stamp_;
-    ++line.pins;
-    if (write) {
-      line.dirty = true;
-      touched_[tile] = 1;
+    ++lines_[index].pins;
+    return hit(lines_[index], now, tile, write);
+  }
+  // acquire() and release() at once: a use that pins nothing (the approximate
+  // engine, whose fragments hold no line across their blend). kNever as for
+  // acquire(); the line is then not pinned either.
+  Cycle touch(Cycle now, uint32_t tile, bool write) {  // inline: once per fragment
+    const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
+    if (index == kInvalid) [[unlikely]] {
+      const Cycle ready = miss(now, tile, write);
+      if (ready != kNever) release(tile);
+      return ready;
     }
-    const Cycle hit_ready = now + cfg_.hit_latency;
-    if (line.ready > hit_ready) {
-      ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
-      return line.ready;
-    }
-    return hit_ready;
+    return hit(lines_[index], now, tile, write);
   }
   // The use of one acquire() of `tile` ended (its blend or resolve is done).
   // Returns true when this made a line of the set of the last refusedBySet()
@@ -122,6 +121,21 @@ class BlendArrayCache {
     uint32_t pins = 0;   // acquires of this line whose use has not ended (no victim while > 0)
   };
   Cycle miss(Cycle now, uint32_t tile, bool write);  // acquire() of a tile not resident (or out of range)
+  Cycle hit(Line& line, Cycle now, uint32_t tile, bool write) {  // acquire() of a resident tile, but the pin
+    ++stats_.accesses;
+    ++stats_.hits;
+    line.stamp = ++stamp_;
+    if (write) {
+      line.dirty = true;
+      touched_[tile] = 1;
+    }
+    const Cycle hit_ready = now + cfg_.hit_latency;
+    if (line.ready > hit_ready) {
+      ++stats_.hits_under_miss;  // the fill is still in flight: wait for it
+      return line.ready;
+    }
+    return hit_ready;
+  }
   [[noreturn]] static void releaseWithoutAcquire(uint32_t tile);  // release()'s caller bug
 
   CacheConfig cfg_;

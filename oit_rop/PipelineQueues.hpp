@@ -27,6 +27,7 @@ class Fifo {
   size_t size() const { return (tail_ - head_) & mask_; }
   T& front() { return buf_[head_]; }
   const T& front() const { return buf_[head_]; }
+  const T& at(size_t i) const { return buf_[(head_ + i) & mask_]; }  // i < size()
   void push(const T& v) {
     buf_[tail_] = v;
     tail_ = (tail_ + 1) & mask_;

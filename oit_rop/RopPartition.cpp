@@ -374,20 +374,6 @@ Cycle RopPartition::nextEvent(bool refused, bool sb_full, bool draining) {
   return next;
 }
 
-namespace {
-// Min-heap of cycles (std heap with greater<>): front() is the earliest.
-void heapPush(std::vector<Cycle>& h, Cycle c) {
-  h.push_back(c);
-  std::push_heap(h.begin(), h.end(), std::greater<Cycle>());
-}
-Cycle heapPop(std::vector<Cycle>& h) {
-  std::pop_heap(h.begin(), h.end(), std::greater<Cycle>());
-  const Cycle c = h.back();
-  h.pop_back();
-  return c;
-}
-}  // namespace
-
 void RopPartition::approximatePhase() {
   // One visit per fragment in issue order (= submission order within the
   // partition). Each stage's time follows from when the fragment reaches it
@@ -398,6 +384,7 @@ void RopPartition::approximatePhase() {
   // throughput, in issue order). Differences from the cycle engine: DESIGN.md.
   constexpr unsigned kShift = RateLimiter::kShift;
   constexpr int64_t kOne = RateLimiter::kOne;
+  constexpr size_t kLookahead = 8;  // records ahead whose lock entry is prefetched
   flushAccounts();  // every stage idle up to here; the timelines account the phase
   const Cycle start = now_;
   std::array<StageTimeline, 5> tl;
@@ -407,9 +394,8 @@ void RopPartition::approximatePhase() {
   const bool grouped = cfg_.lock.per_primitive && cfg_.lock.granularity != LockGranularity::Pixel;
   ReleaseTable locks(owned_.size() * geo_.lock_per_tile, grouped);
   const unsigned cap = cfg_.lock.capacity;
-  approx_sb_.clear();
-  approx_sb_.reserve(cap + 1);
-  approx_waiting_.clear();
+  approx_sb_.reset(now_);
+  approx_waiting_.reset(now_);
   // Issue and blend slots in 1/kOne cycles (rates need not be integers).
   const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / cfg_.input.fragments_per_clock));
   const double alu_rate = std::max(1e-6, double(cfg_.alu.blends_per_clock) * s_.format_rate);
@@ -431,13 +417,17 @@ void RopPartition::approximatePhase() {
       }
     }
     const InRec r = q.front();  // a copy: advance() lets other partitions refill (and grow) the queue
+    if (q.size() > 2 * kLookahead) {  // the record further ahead, its lock entry nearer
+      __builtin_prefetch(&q.at(2 * kLookahead));
+      locks.prefetch(q.at(kLookahead).lock);
+    }
     if (r.flags & InRec::kPassEnd) {
       // Pass p+1 starts after pass p drained.
       q.pop();
       if (last_release > now_) advance(last_release, false);
       issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
-      approx_sb_.clear();
-      approx_waiting_.clear();
+      approx_sb_.reset(now_);
+      approx_waiting_.reset(now_);
       res_.pass_end.push_back(now_);
       gap0 = StageStatus::idle();
       if (++pass_ == front_.passes()) break;
@@ -446,7 +436,7 @@ void RopPartition::approximatePhase() {
     // Scoreboard entry: when every one is in use, the earliest release frees one.
     int64_t fx = issue_fx;
     if (approx_sb_.size() >= cap) {
-      const int64_t freed = int64_t(heapPop(approx_sb_)) << kShift;
+      const int64_t freed = int64_t(approx_sb_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;
         gap0 = StageStatus::stall(Stall::ScoreboardFull);
@@ -455,8 +445,8 @@ void RopPartition::approximatePhase() {
     const Cycle issue = Cycle(fx >> kShift);
     issue_fx = fx + in_step;
     if (issue > now_) advance(issue, false);
-    while (!approx_sb_.empty() && approx_sb_.front() <= now_) heapPop(approx_sb_);
-    while (!approx_waiting_.empty() && approx_waiting_.front() <= now_) heapPop(approx_waiting_);
+    approx_sb_.retire(now_);
+    approx_waiting_.retire(now_);
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
 
@@ -482,19 +472,18 @@ void RopPartition::approximatePhase() {
         ls.wait_cycles += free - early;
         ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
         enter = free;
-        heapPush(approx_waiting_, enter);
+        approx_waiting_.push(enter);
       }
       tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       const bool write = !culled && r.outcome != uint8_t(model::InsertOutcome::Discarded);
       const Cycle lock_enter = enter;
-      Cycle ready = cache_.acquire(enter, r.tile, write);
+      Cycle ready = cache_.touch(enter, r.tile, write);
       while (ready == kNever) {  // the miss queue is full: retry when its first entry frees
-        if (cache_.refusedBySet())  // lines are pinned only during a visit
+        if (cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", id_));
         enter = std::max(enter + 1, cache_.missQueueFreesAt());
-        ready = cache_.acquire(enter, r.tile, write);
+        ready = cache_.touch(enter, r.tile, write);
       }
-      cache_.release(r.tile);
       if (enter > lock_enter) tl[2].add(acc[2], lock_enter, enter, StageStatus::stall(Stall::CacheMissWait));
       tl[2].add(acc[2], enter, enter + 1, kBusy);
       const bool miss = ready > enter + cfg_.cache.hit_latency;
@@ -511,7 +500,7 @@ void RopPartition::approximatePhase() {
       locks.released(r.lock, release);
     }
     last_release = std::max(last_release, release);
-    heapPush(approx_sb_, release);
+    approx_sb_.push(release);
     approx_lock_.peak_occupancy = std::max(approx_lock_.peak_occupancy, uint32_t(approx_sb_.size()));
     q.pop();
     front_.popped(id_);
@@ -523,8 +512,8 @@ void RopPartition::approximatePhase() {
     tl[i].close(acc[i], now_, StageStatus::idle());
     since_[i] = now_;  // (Resolve: idle through the phase, as before)
   }
-  approx_sb_.clear();
-  approx_waiting_.clear();
+  approx_sb_.reset(now_);
+  approx_waiting_.reset(now_);
 }
 
 void RopPartition::waitForFrontEnd() {

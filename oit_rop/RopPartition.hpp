@@ -171,7 +171,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // Approximate engine: releases of the fragments in flight and lock-entry
   // cycles of those waiting for the lock (min-heaps), and its lock figures.
   bool approximate_ = false;
-  std::vector<Cycle> approx_sb_, approx_waiting_;
+  ReleaseCalendar approx_sb_, approx_waiting_;  // scoreboard releases; lock entries still ahead
   LockStats approx_lock_;
   sc_core::sc_event done_event_;
   PartitionResult res_;

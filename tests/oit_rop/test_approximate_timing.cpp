@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <set>
 
 #include "RopTestUtil.hpp"
 #include "oit_rop/ApproximateTiming.hpp"
@@ -54,6 +55,55 @@ TEST(ReleaseTable, GroupedOwnerWaitsOnlyForTheOwnersBeforeIt) {
   r.released(0, 80);
   EXPECT_EQ(r.enterAfter(0, 2), 60u);
   EXPECT_EQ(r.enterAfter(0, 3), 80u);
+}
+
+TEST(ReleaseCalendar, RetiresDueReleasesAndPopsTheEarliest) {
+  ReleaseCalendar c;
+  c.reset(100);  // cycles up to 100 retired
+  c.push(105);
+  c.push(103);
+  c.push(105);
+  c.push(100 + ReleaseCalendar::kWindow + 50);  // beyond the counts: the heap
+  c.push(90);                                   // already due
+  EXPECT_EQ(c.size(), 5u);
+  EXPECT_EQ(c.popEarliest(), 100u);  // the due one: reported as the last retired cycle
+  EXPECT_EQ(c.popEarliest(), 103u);
+  EXPECT_EQ(c.size(), 3u);
+  c.retire(104);  // nothing due at 104 (103 was popped)
+  EXPECT_EQ(c.size(), 3u);
+  c.retire(105);  // both 105s
+  EXPECT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.popEarliest(), 100u + ReleaseCalendar::kWindow + 50);
+  EXPECT_TRUE(c.empty());
+  EXPECT_THROW(c.popEarliest(), std::logic_error);
+}
+
+TEST(ReleaseCalendar, MatchesASortedListAcrossWrapsAndJumps) {
+  // A pseudo-random mix of pushes (0 to 3 windows ahead), retires (small
+  // steps and jumps past the window) and pops, checked against a multiset.
+  ReleaseCalendar c;
+  std::multiset<Cycle> ref;
+  Cycle now = 7;
+  c.reset(now);
+  uint64_t x = 12345;
+  const auto next = [&x] { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; };
+  for (int i = 0; i < 200000; ++i) {
+    const uint64_t op = next() % 16;
+    if (op < 8) {
+      const Cycle t = now + next() % (op < 6 ? 300 : 3 * ReleaseCalendar::kWindow);
+      c.push(t);
+      ref.insert(t);
+    } else if (op < 13) {
+      now += op == 12 && next() % 64 == 0 ? 2 * ReleaseCalendar::kWindow : next() % 5;
+      c.retire(now);
+      ref.erase(ref.begin(), ref.upper_bound(now));
+    } else if (!ref.empty()) {
+      const Cycle t = c.popEarliest();
+      EXPECT_EQ(t, std::max(*ref.begin(), now)) << "step " << i;  // a due entry reads as `now`
+      ref.erase(ref.begin());
+    }
+    ASSERT_EQ(c.size(), ref.size()) << "step " << i;
+  }
 }
 
 RopConfig approximate(RopConfig c = smallConfig()) {
