@@ -9,6 +9,7 @@ namespace oit::rop {
 namespace {
 constexpr size_t kHighWatermark = size_t(1) << 20;  // records per partition backlog
 constexpr size_t kLowWatermark = kHighWatermark / 2;
+constexpr size_t kRouteChunk = 8192;  // records routed per refill() (a source batch may hold more)
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr size_t kPrefetchAhead = 8;  // records ahead; not tuned
 }  // namespace
@@ -222,7 +223,11 @@ void FrontEnd::route(std::span<const Fragment> batch) {
 
 void FrontEnd::refill() {
   if (exhausted_) return;
-  const std::span<const Fragment> batch = src_.next();
+  // A source batch is routed kRouteChunk records at a time: the queue records
+  // a chunk writes are still in the L2 when the partitions read them.
+  if (pending_.empty()) pending_ = src_.next();  // valid until the next next()
+  const std::span<const Fragment> batch = pending_.first(std::min(pending_.size(), kRouteChunk));
+  pending_ = pending_.subspan(batch.size());
   if (batch.empty()) {
     // End of pass: every partition drains before its next pass (or resolve).
     for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0});

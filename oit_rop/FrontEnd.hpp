@@ -115,6 +115,7 @@ class FrontEnd {
   template <bool First, bool Hierarchical>
   void route(std::span<const Fragment> batch);  // refill()'s per-record loop
   FragmentSource& src_;
+  std::span<const Fragment> pending_;  // the rest of the source's last batch, not yet routed
   model::OitAlgorithm& algo_;
   const model::DrawClassifier& classes_;
   const model::OpaqueLayer& opaque_;

@@ -124,6 +124,31 @@ TEST(TimingRun, DeterministicStats) {
   EXPECT_FALSE(a.stats["timeseries"]["samples"].empty());
 }
 
+// The front end routes a source batch in chunks (FrontEnd's kRouteChunk): how
+// the trace is batched changes neither engine's run. One record per batch, the
+// tests' 333, and 2^16 (several chunks per batch) give identical stats.
+TEST(TimingRun, SourceBatchSizeDoesNotChangeTheRun) {
+  const auto fs = smallScene(128, 128, 8, 5);  // ~70 K records: 2^16 holds several chunks
+  ASSERT_GT(fs.size(), size_t(1) << 16);
+  for (const SimEngine e : {SimEngine::CycleStepped, SimEngine::Approximate}) {
+    RopConfig cfg = smallConfig();
+    cfg.sim.engine = e;
+    std::vector<nlohmann::json> stats;
+    for (const size_t batch : {size_t(1), size_t(333), size_t(1) << 16}) {
+      const auto r = runInChild([&] {
+        model::MemorySource src(model::testutil::header(128, 128), fs, batch);
+        auto a = model::makeAlgorithm("mlab", model::testutil::layers(4));
+        return runTiming(src, *a, cfg, {});
+      });
+      ASSERT_TRUE(r.ok) << r.error;
+      stats.push_back(r.stats);
+    }
+    EXPECT_EQ(stats[0], stats[1]) << "engine " << int(e);
+    EXPECT_EQ(stats[1], stats[2]) << "engine " << int(e);
+    EXPECT_GT(stats[2]["fragments"]["in"].get<uint64_t>(), 0u);
+  }
+}
+
 TEST(TimingRun, TwoPartitionsSplitFragmentsByTile) {
   const auto fs = smallScene(W, H, 5, 3);
   RopConfig cfg = smallConfig();
