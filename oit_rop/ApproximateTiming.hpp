@@ -141,8 +141,9 @@ class ReleaseCalendar {
     } else {
       for (Cycle c = base_; c <= now;) {  // word by word over [base_, now]
         const size_t i = size_t(c & kMask), w = i / 64, lo = i % 64;
-        const Cycle n = std::min<Cycle>(now - c + 1, 64 - lo);
-        const uint64_t span = (n == 64 ? ~uint64_t(0) : ((uint64_t(1) << n) - 1)) << lo;
+        const size_t hi = size_t(std::min<Cycle>(63, lo + (now - c)));  // last bit of this word in range
+        const uint64_t span = (~uint64_t(0) << lo) & (~uint64_t(0) >> (63 - hi));
+        const Cycle n = hi - lo + 1;
         for (uint64_t b = bits_[w] & span; b; b &= b - 1) {
           const size_t j = w * 64 + size_t(std::countr_zero(b));
           size_ -= counts_[j];
