@@ -238,8 +238,9 @@ const std::vector<Property>& registry() {
       enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},
                   "cycle: every stage evaluated on each cycle where one can move (the reference); approximate "
                   "(experimental): each fragment visited once, its stage times computed from the resources' free "
-                  "times; 1.4-2x faster on the bench trace, same image and counts, frame cycles +1 to +6 % on "
-                  "seven of ten test configurations but up to +87 % when the blend ALU limits (DESIGN.md)"),
+                  "times; 1.8-2.1x faster on the bench trace, same image and counts, frame cycles +1 to +6 % "
+                  "on seven of ten test configurations but up to +87 % on one bound by depth-read latency "
+                  "(DESIGN.md)"),
   };
   return props;
 }

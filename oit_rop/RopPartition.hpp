@@ -169,9 +169,9 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   Cycle last_write_done_ = 0;
   bool done_ = false;
   // Approximate engine: releases of the fragments in flight and lock-entry
-  // cycles of those waiting for the lock (min-heaps), and its lock figures.
+  // cycles of those waiting for the lock (ReleaseCalendars), and its lock figures.
   bool approximate_ = false;
-  ReleaseCalendar approx_sb_, approx_waiting_;  // scoreboard releases; lock entries still ahead
+  ReleaseCalendar approx_sb_, approx_waiting_;
   LockStats approx_lock_;
   sc_core::sc_event done_event_;
   PartitionResult res_;
