@@ -140,7 +140,6 @@ uint32_t BlendArrayCache::ways() const { return ways_; }
 uint32_t BlendArrayCache::sets() const { return sets_; }
 uint32_t BlendArrayCache::tiles() const { return tiles_; }
 uint64_t BlendArrayCache::lineAddress(uint32_t tile) const { return base_ + uint64_t(tile) * line_bytes_; }
-const CacheStats& BlendArrayCache::stats() const { return stats_; }
 
 uint32_t BlendArrayCache::linesInUse() const {
   uint32_t n = 0;

@@ -94,7 +94,7 @@ class BlendArrayCache {
   bool resident(uint32_t tile) const;
   uint32_t lineBytes() const;
   uint32_t lines() const;  // capacity in lines
-  const CacheStats& stats() const;
+  const CacheStats& stats() const { return stats_; }
 
   // Added accessors.
   uint32_t ways() const;  // effective associativity (<= cfg.ways)

@@ -404,6 +404,7 @@ void RopPartition::approximatePhase() {
   const Cycle tail = cfg_.lock.release == LockRelease::EndOfShader ? cfg_.lock.shader_tail : 0;
   Cycle last_release = now_, last_finish = now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
+  std::vector<Cycle> fill_ready(geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
   auto& q = front_.queue(id_);
   for (;;) {
     if (q.empty()) {
@@ -455,7 +456,10 @@ void RopPartition::approximatePhase() {
     const Cycle finish = issue + shader_.latency(r.seq, pass_);
     last_finish = std::max(last_finish, finish);
     const Cycle passed = finish + cfg_.early_depth.latency;
-    const Cycle early = early_.test(finish, r.tile, (r.flags & InRec::kNeedsDepthRead) != 0);
+    // Memory-side resources (depth-tile buffer, blend-array cache, DRAM) see
+    // the fragment at its visit (issue) cycle, so their requests are booked in
+    // time order; the latency they return counts from the fragment's own time.
+    const Cycle early = early_.test(issue, r.tile, (r.flags & InRec::kNeedsDepthRead) != 0) + (finish - issue);
     tl[1].add(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].add(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
@@ -477,12 +481,26 @@ void RopPartition::approximatePhase() {
       tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       const bool write = !culled && r.outcome != uint8_t(model::InsertOutcome::Discarded);
       const Cycle lock_enter = enter;
-      Cycle ready = cache_.touch(enter, r.tile, write);
-      while (ready == kNever) {  // the miss queue is full: retry when its first entry frees
+      // The cache in the visit's frame too (see early depth). A miss's fill
+      // counts from the fragment's lock entry; a hit on a line whose fill was
+      // in flight waits for that fill's own time (fill_ready), not shifted by
+      // its lock wait, which already covered the older fragment that missed.
+      const uint64_t misses = cache_.stats().misses;
+      Cycle at_cache = issue;
+      Cycle got = cache_.touch(at_cache, r.tile, write);
+      while (got == kNever) {  // the miss queue is full: retry when its first entry frees
         if (cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", id_));
-        enter = std::max(enter + 1, cache_.missQueueFreesAt());
-        ready = cache_.touch(enter, r.tile, write);
+        at_cache = std::max(at_cache + 1, cache_.missQueueFreesAt());
+        got = cache_.touch(at_cache, r.tile, write);
+      }
+      enter += at_cache - issue;  // waited for a miss-queue entry
+      Cycle ready = enter + cfg_.cache.hit_latency;
+      if (cache_.stats().misses != misses) {
+        ready = got + (enter - at_cache);
+        fill_ready[r.tile] = ready;
+      } else if (got > at_cache + cfg_.cache.hit_latency) {
+        ready = std::max(ready, fill_ready[r.tile]);
       }
       if (enter > lock_enter) tl[2].add(acc[2], lock_enter, enter, StageStatus::stall(Stall::CacheMissWait));
       tl[2].add(acc[2], enter, enter + 1, kBusy);

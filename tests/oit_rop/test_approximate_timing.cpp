@@ -171,12 +171,36 @@ TEST(ApproximateTiming, CloseToTheCycleEngine) {
   ASSERT_TRUE(c.ok && a.ok) << c.error << a.error;
   EXPECT_TRUE(sameBits(a.image, c.image));
   const auto &cs = c.stats, &as = a.stats;
-  // Measured: frame +9.3 %, misses -0.15 %, blend-array bytes -0.15 %, lock
-  // conflicts -27 % (the synthetic bench trace: +1.45 %, +0.002 %, +0.002 %, -0.4 %).
-  EXPECT_LT(rel(as["timing"]["cycles"], cs["timing"]["cycles"]), 0.12);
+  // Measured: frame +0.73 %, misses -0.15 %, blend-array bytes -0.15 %, lock
+  // conflicts -18.5 % (the synthetic bench trace: -1.14 %, +0.002 %, +0.002 %, -1.5 %).
+  // (Before the memory side worked in the visit's frame, session 9: frame +9.3 %.)
+  EXPECT_LT(rel(as["timing"]["cycles"], cs["timing"]["cycles"]), 0.03);
   EXPECT_LT(rel(as["cache"]["misses"], cs["cache"]["misses"]), 0.02);
   EXPECT_LT(rel(as["memory"]["dram_read_bytes"]["blend_arrays"], cs["memory"]["dram_read_bytes"]["blend_arrays"]), 0.02);
-  EXPECT_LT(rel(as["lock"]["conflicts"], cs["lock"]["conflicts"]), 0.35);
+  EXPECT_LT(rel(as["lock"]["conflicts"], cs["lock"]["conflicts"]), 0.25);
+}
+
+// Bound by depth-read latency: no HiZ (every fragment reads its depth tile),
+// input at 3 fragments per clock, the scoreboard full most of the time. Booking
+// the memory side at each fragment's own (future) time left holes in the DRAM
+// schedule that requests booked later in visit order but earlier in time
+// could not use: depth reads waited 4.5x longer and the frame took +87 % on
+// the bench configuration (DESIGN.md). In the visit's frame they are close.
+TEST(ApproximateTiming, CloseOnALatencyBoundConfiguration) {
+  constexpr uint32_t W = 192, H = 128;
+  const auto fs = smallScene(W, H, 24, 3);
+  model::AlgorithmParams p;
+  p.format = model::StorageFormat::Fp16;
+  RopConfig cyc = smallConfig();
+  cyc.early_depth.hierarchical = false;
+  cyc.alu.blends_per_clock = 1;
+  cyc.input.fragments_per_clock = 3;
+  const auto c = runInChild([&] { return timed("wboit", p, fs, W, H, cyc); });
+  const auto a = runInChild([&] { return timed("wboit", p, fs, W, H, approximate(cyc)); });
+  ASSERT_TRUE(c.ok && a.ok) << c.error << a.error;
+  EXPECT_TRUE(sameBits(a.image, c.image));
+  // Measured: +0.36 % (16,086,210 against 16,028,501); +85 % before.
+  EXPECT_LT(rel(a.stats["timing"]["cycles"], c.stats["timing"]["cycles"]), 0.05);
 }
 
 TEST(ApproximateTiming, Deterministic) {
