@@ -28,6 +28,7 @@ struct CacheStats {
   // for the fill).
   uint64_t hits_under_miss = 0;
   double hitRate() const { return accesses ? double(hits) / double(accesses) : 0.0; }
+  bool operator==(const CacheStats&) const = default;
 };
 
 // Cache geometry once the algorithm fixes the line size (tile pixels x bytes per

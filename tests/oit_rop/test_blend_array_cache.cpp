@@ -629,16 +629,10 @@ TEST(BlendArrayCache, TouchIsAcquireThenRelease) {
     ASSERT_EQ(b.linesInUse(), 0u);
   }
   EXPECT_GT(refused, 0u);  // the two-entry miss queue did refuse (the stream is not too easy)
-  const CacheStats &sa = a.stats(), &sb = b.stats();
-  EXPECT_EQ(sa.accesses, sb.accesses);
-  EXPECT_EQ(sa.hits, sb.hits);
-  EXPECT_EQ(sa.misses, sb.misses);
-  EXPECT_EQ(sa.evictions, sb.evictions);
-  EXPECT_EQ(sa.writebacks, sb.writebacks);
-  EXPECT_EQ(sa.miss_queue_full, sb.miss_queue_full);
-  EXPECT_EQ(sa.hits_under_miss, sb.hits_under_miss);
-  EXPECT_GT(sa.hits, 0u);
-  EXPECT_GT(sa.misses, 0u);
+  EXPECT_TRUE(a.stats() == b.stats());  // every count and peak
+  EXPECT_GT(a.stats().hits, 0u);
+  EXPECT_GT(a.stats().misses, 0u);
+  EXPECT_GT(a.stats().hits_under_miss, 0u);
   EXPECT_EQ(b.stats().set_in_use, 0u);  // nothing pinned: a set is never all in use
 }
 
