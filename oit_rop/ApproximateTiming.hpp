@@ -111,7 +111,7 @@ class ReleaseCalendar {
   void push(Cycle t) {
     ++size_;
     if (t < base_) {
-      ++due_;  // already due: retired by the next retire(), earliest() meanwhile
+      ++due_;  // already due: dropped by the next retire(), or popped first by popEarliest()
     } else if (t - base_ < kWindow) {
       add(t);
     } else {
