@@ -485,6 +485,9 @@ void RopPartition::approximatePhase() {
       // counts from the fragment's lock entry; a hit on a line whose fill was
       // in flight waits for that fill's own time (fill_ready), not shifted by
       // its lock wait, which already covered the older fragment that missed.
+      // Into the cache the next cycle when admitted on arrival, in the release's
+      // own cycle when admitted at one (the cycle engine's stage order).
+      enter += free > early ? 0 : 1;
       const uint64_t misses = cache_.stats().misses;
       Cycle at_cache = issue;
       Cycle got = cache_.touch(at_cache, r.tile, write);
@@ -502,8 +505,9 @@ void RopPartition::approximatePhase() {
       } else if (got > at_cache + cfg_.cache.hit_latency) {
         ready = std::max(ready, fill_ready[r.tile]);
       }
-      if (enter > lock_enter) tl[2].add(acc[2], lock_enter, enter, StageStatus::stall(Stall::CacheMissWait));
-      tl[2].add(acc[2], enter, enter + 1, kBusy);
+      const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
+      if (pass_on > lock_enter) tl[2].add(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
+      tl[2].add(acc[2], pass_on, pass_on + 1, kBusy);
       const bool miss = ready > enter + cfg_.cache.hit_latency;
       tl[3].add(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
       const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);

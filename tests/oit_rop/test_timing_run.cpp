@@ -343,12 +343,15 @@ TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
 //  - no scoreboard_full (at most ~2 x 45 = 90 of 256 entries in flight), no
 //    lock_wait, no cache_miss_wait in the cache stage.
 // Exact: every rate, latency and order above is an integer of the model.
-TEST(TimingRun, StageAccountsOfAStreamOfDistinctPixelsMatchTheHandDerivedCycles) {
+// Both engines give these figures.
+class StageAccountsOn : public ::testing::TestWithParam<SimEngine> {};
+TEST_P(StageAccountsOn, AStreamOfDistinctPixelsMatchesTheHandDerivedCycles) {
   constexpr uint32_t N = 64 * 64;
   std::vector<Fragment> fs;
   for (uint16_t y = 0; y < 64; ++y)
     for (uint16_t x = 0; x < 64; ++x) fs.push_back(model::testutil::frag(x, y, 0.5f, 0, 1, 0, 0.5f));
   RopConfig cfg = smallConfig();
+  cfg.sim.engine = GetParam();
   cfg.partitions.count = 1;
   cfg.input.latency_model = LatencyModel::Fixed;
   cfg.input.latency_min = 20;
@@ -376,6 +379,12 @@ TEST(TimingRun, StageAccountsOfAStreamOfDistinctPixelsMatchTheHandDerivedCycles)
   EXPECT_EQ(part["pass_end_cycles"][0].get<uint64_t>(), N / 2 - 1 + 45);
   expectBalanced(r.stats);
 }
+
+INSTANTIATE_TEST_SUITE_P(TimingRun, StageAccountsOn,
+                         ::testing::Values(SimEngine::CycleStepped, SimEngine::Approximate),
+                         [](const ::testing::TestParamInfo<SimEngine>& i) {
+                           return std::string(i.param == SimEngine::Approximate ? "Approximate" : "Cycle");
+                         });
 
 TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   // Transparent fragments only in the top-left 16x16: 4 of 64 tiles touched.
