@@ -481,13 +481,13 @@ void RopPartition::approximatePhase() {
       tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       const bool write = !culled && r.outcome != uint8_t(model::InsertOutcome::Discarded);
       const Cycle lock_enter = enter;
+      // Into the cache the next cycle when admitted on arrival, in the release's
+      // own cycle when admitted at one (the cycle engine's stage order).
+      enter += free > early ? 0 : 1;
       // The cache in the visit's frame too (see early depth). A miss's fill
       // counts from the fragment's lock entry; a hit on a line whose fill was
       // in flight waits for that fill's own time (fill_ready), not shifted by
       // its lock wait, which already covered the older fragment that missed.
-      // Into the cache the next cycle when admitted on arrival, in the release's
-      // own cycle when admitted at one (the cycle engine's stage order).
-      enter += free > early ? 0 : 1;
       const uint64_t misses = cache_.stats().misses;
       Cycle at_cache = issue;
       Cycle got = cache_.touch(at_cache, r.tile, write);

@@ -143,6 +143,12 @@ inline std::vector<std::string> allAlgorithmNames() {
 }
 inline std::string paramName(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
+// Both timing engines, for tests instantiated over them (engineName names each case).
+inline const std::vector<SimEngine> kBothEngines = {SimEngine::CycleStepped, SimEngine::Approximate};
+inline std::string engineName(const ::testing::TestParamInfo<SimEngine>& info) {
+  return info.param == SimEngine::Approximate ? "Approximate" : "Cycle";
+}
+
 inline TimingResult timed(const std::string& algo, const model::AlgorithmParams& p, const std::vector<Fragment>& fs,
                           uint32_t w, uint32_t h, const RopConfig& cfg, TimingOptions opt = {}) {
   model::MemorySource src(model::testutil::header(w, h), fs, 333);

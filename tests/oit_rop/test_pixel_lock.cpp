@@ -5,7 +5,6 @@
 #include <map>
 #include <random>
 #include <set>
-#include <string>
 
 #include "RopTestUtil.hpp"
 #include "oit_rop/PixelLock.hpp"
@@ -244,9 +243,6 @@ RopConfig onePartition(SimEngine engine = SimEngine::CycleStepped) {
 // The issue's analytic lock expectations hold for both engines: the cycle
 // engine and the approximate one give the same, hand-derived figures.
 class PixelLockTimingOn : public ::testing::TestWithParam<SimEngine> {};
-std::string engineName(const ::testing::TestParamInfo<SimEngine>& i) {
-  return i.param == SimEngine::Approximate ? "Approximate" : "Cycle";
-}
 
 // N fragments to one pixel, N <= the scoreboard's capacity (all issue at the
 // input rate, 2/clk): fragment i issues at floor(i/2) and reaches the lock at
@@ -395,8 +391,7 @@ TEST_P(PixelLockTimingOn, CoarserGranularityRaisesLockWaits) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(PixelLockTiming, PixelLockTimingOn,
-                         ::testing::Values(SimEngine::CycleStepped, SimEngine::Approximate), engineName);
+INSTANTIATE_TEST_SUITE_P(PixelLockTiming, PixelLockTimingOn, ::testing::ValuesIn(kBothEngines), engineName);
 
 // The unordered interlock admits a fragment while an older one of its pixel is
 // still in flight. (The image check holds by construction: the front end

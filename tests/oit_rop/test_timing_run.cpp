@@ -130,7 +130,7 @@ TEST(TimingRun, DeterministicStats) {
 TEST(TimingRun, SourceBatchSizeDoesNotChangeTheRun) {
   const auto fs = smallScene(128, 128, 8, 5);  // ~70 K records: 2^16 holds several chunks
   ASSERT_GT(fs.size(), size_t(1) << 16);
-  for (const SimEngine e : {SimEngine::CycleStepped, SimEngine::Approximate}) {
+  for (const SimEngine e : kBothEngines) {
     RopConfig cfg = smallConfig();
     cfg.sim.engine = e;
     std::vector<nlohmann::json> stats;
@@ -380,11 +380,7 @@ TEST_P(StageAccountsOn, AStreamOfDistinctPixelsMatchesTheHandDerivedCycles) {
   expectBalanced(r.stats);
 }
 
-INSTANTIATE_TEST_SUITE_P(TimingRun, StageAccountsOn,
-                         ::testing::Values(SimEngine::CycleStepped, SimEngine::Approximate),
-                         [](const ::testing::TestParamInfo<SimEngine>& i) {
-                           return std::string(i.param == SimEngine::Approximate ? "Approximate" : "Cycle");
-                         });
+INSTANTIATE_TEST_SUITE_P(TimingRun, StageAccountsOn, ::testing::ValuesIn(kBothEngines), engineName);
 
 TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   // Transparent fragments only in the top-left 16x16: 4 of 64 tiles touched.
