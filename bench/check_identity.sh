@@ -5,17 +5,19 @@
 # cache, time series ...) byte for byte; each run also checks its timing image
 # bit for bit against the functional one.
 #
-#   bench/check_identity.sh BEFORE/bench_timing AFTER/bench_timing [--quick]
-#   bench/check_identity.sh --base REV AFTER/bench_timing [--quick]
+#   bench/check_identity.sh BEFORE/bench_timing AFTER/bench_timing [--quick] [--engine E]
+#   bench/check_identity.sh --base REV AFTER/bench_timing [--quick] [--engine E]
 #
 # --base REV builds BEFORE itself: a detached git worktree of REV in
 # ${TMPDIR:-/tmp}/oitsim-base-<commit> and bench_timing in it (Release; kept, so a
 # second run with the same REV does not rebuild; `git worktree remove` it when done).
 # --quick: only the small trace (about 30 s instead of 1 minute).
+# --engine E: every configuration with --set sim.engine=E (cycle, the default,
+# or approximate); a configuration's own sim.engine would be overridden.
 set -euo pipefail
 if [ $# -lt 2 ]; then
-  echo "usage: $0 BEFORE_BENCH_TIMING AFTER_BENCH_TIMING [--quick]" >&2
-  echo "       $0 --base REV AFTER_BENCH_TIMING [--quick]" >&2
+  echo "usage: $0 BEFORE_BENCH_TIMING AFTER_BENCH_TIMING [--quick] [--engine cycle|approximate]" >&2
+  echo "       $0 --base REV AFTER_BENCH_TIMING [--quick] [--engine cycle|approximate]" >&2
   exit 2
 fi
 if [ "$1" = --base ]; then
@@ -31,7 +33,18 @@ if [ "$1" = --base ]; then
   shift 2
   set -- "$tree/build/bench/bench_timing" "$@"
 fi
-before=$1 after=$2 quick=${3:-}
+before=$1 after=$2 quick= engine=
+shift 2
+while [ $# -gt 0 ]; do
+  case $1 in
+    --quick) quick=--quick; shift ;;
+    --engine)
+      [ $# -ge 2 ] || { echo "$0: --engine needs a value (cycle or approximate)" >&2; exit 2; }
+      case $2 in cycle | approximate) engine=$2 ;; *) echo "$0: --engine $2: expected cycle or approximate" >&2; exit 2 ;; esac
+      shift 2 ;;
+    *) echo "$0: unknown option $1 (expected --quick or --engine E)" >&2; exit 2 ;;
+  esac
+done
 for b in "$before" "$after"; do
   [ -x "$b" ] || { echo "$0: $b is not an executable" >&2; exit 2; }
 done
@@ -69,6 +82,7 @@ for c in "${configs[@]}"; do
   IFS='|' read -r name trace opts <<<"$c"
   targs=()
   [ "$trace" = small ] && targs=("${small[@]}")
+  [ -n "$engine" ] && opts="$opts --set sim.engine=$engine"
   # shellcheck disable=SC2086  # opts is a list of options
   for side in before after; do
     bin=$before
