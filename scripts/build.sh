@@ -9,11 +9,13 @@ case ${OITSIM_NATIVE:-} in
   '' | ON | OFF) ;;
   *) echo "build.sh: OITSIM_NATIVE=$OITSIM_NATIVE: expected ON or OFF" >&2; exit 2 ;;
 esac
+# OITSIM_NATIVE=ON|OFF sets the CMake option of that name (-march=native),
+# also in a build folder configured before.
+opts=()
+[ -n "${OITSIM_NATIVE:-}" ] && opts+=(-DOITSIM_NATIVE="$OITSIM_NATIVE")
 if [ ! -f "$build/build.ninja" ]; then
-  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE="${OITSIM_BUILD_TYPE:-Release}"
-fi
-# OITSIM_NATIVE=ON|OFF (re)sets the CMake option of that name (-march=native).
-if [ -n "${OITSIM_NATIVE:-}" ]; then
-  cmake -S "$root" -B "$build" -DOITSIM_NATIVE="$OITSIM_NATIVE" >/dev/null
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE="${OITSIM_BUILD_TYPE:-Release}" "${opts[@]}"
+elif [ ${#opts[@]} -gt 0 ]; then
+  cmake -S "$root" -B "$build" "${opts[@]}" >/dev/null
 fi
 cmake --build "$build" -j "$jobs"
