@@ -3,13 +3,13 @@
 # figure that, unlike wall-clock time on a shared VM, is the same on every run
 # of the same binary and input, so a change of a few per cent is visible at once.
 # Only the run itself is counted (runTiming, or FunctionalRenderer::render),
-# not the bench's trace generation, and per transparent-or-opaque record.
+# not the bench's trace generation; per record of the trace (opaque ones too).
 #
 #   bench/count_instructions.sh BENCH_TIMING [--mode timing|functional] [--engine cycle|approximate]
 #                               [--scene small|bench] [-- MORE_BENCH_TIMING_OPTIONS]
 #
-# --scene small (default): 640x360, 5,000 quads, 1.28 M records, about 1 minute
-# under valgrind; bench: the bench trace (1280x720, 6.17 M records), about 5.
+# --scene small (default): 640x360, 5,000 quads, 1.51 M records, 4-16 s under
+# valgrind; bench: the bench trace (1280x720, 6.17 M records), about 4x as long.
 # Needs valgrind (Debian package valgrind).
 set -euo pipefail
 usage() {
@@ -53,10 +53,10 @@ trap 'rm -rf "$work"' EXIT
 export SYSTEMC_DISABLE_COPYRIGHT_MESSAGE=1
 # The timing run happens in a forked child: --trace-children follows it, and
 # --toggle-collect counts only inside the run's function in every process.
-if ! valgrind --tool=callgrind --trace-children=yes --toggle-collect="$collect" \
-  --callgrind-out-file="$work/cg.%p" "$bin" "${args[@]}" >"$work/bench.log" 2>"$work/valgrind.log"; then
+if ! valgrind --tool=callgrind --trace-children=yes --toggle-collect="$collect" --log-file="$work/valgrind.%p" \
+  --callgrind-out-file="$work/cg.%p" "$bin" "${args[@]}" >"$work/bench.log" 2>"$work/bench.err"; then
   echo "$0: the run failed:" >&2
-  tail -5 "$work/bench.log" "$work/valgrind.log" >&2
+  cat "$work/bench.err" >&2
   exit 1
 fi
 records=$(grep -o '[0-9.]* M records' "$work/bench.log" | head -1 | awk '{print $1 * 1e6}')
