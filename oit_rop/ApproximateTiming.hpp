@@ -94,7 +94,7 @@ class ReleaseTable {
 
 class ReleaseCalendar {
  public:
-  static constexpr unsigned kWindow = 4096;  // cycles held as counts; later releases wait in a heap
+  static constexpr unsigned kWindow = 16384;  // cycles held as counts; later releases wait in a heap
 
   // Empty, every cycle before `now` + 1 retired.
   void reset(Cycle now) {
@@ -103,6 +103,7 @@ class ReleaseCalendar {
     bits_.fill(0);
     later_.clear();
     base_ = now + 1;
+    next_ = kNone;
     size_ = due_ = 0;
   }
   size_t size() const { return size_; }
@@ -126,11 +127,12 @@ class ReleaseCalendar {
     size_ -= due_;
     due_ = 0;
     if (now < base_) return;
-    if (size_ == 0) {  // nothing in the counts or the heap (the lock-wait calendar, mostly)
+    if (now < next_) {  // nothing in the counts is due (the common call: O(1))
       base_ = now + 1;
+      if (!later_.empty()) pullLater();
       return;
     }
-    if (now - base_ >= kWindow) {
+    if (now - base_ >= kWindow) {  // every count is due
       for (size_t w = 0; w < kWords; ++w)
         for (uint64_t b = bits_[w]; b; b &= b - 1) {
           const size_t i = w * 64 + size_t(std::countr_zero(b));
@@ -139,28 +141,22 @@ class ReleaseCalendar {
         }
       bits_.fill(0);
     } else {
-      for (Cycle c = base_; c <= now;) {  // word by word over [base_, now]
+      for (Cycle c = next_; c <= now;) {  // word by word over [next_, now]
         const size_t i = size_t(c & kMask), w = i / 64, lo = i % 64;
         const size_t hi = size_t(std::min<Cycle>(63, lo + (now - c)));  // last bit of this word in range
         const uint64_t span = (~uint64_t(0) << lo) & (~uint64_t(0) >> (63 - hi));
-        const Cycle n = hi - lo + 1;
         for (uint64_t b = bits_[w] & span; b; b &= b - 1) {
           const size_t j = w * 64 + size_t(std::countr_zero(b));
           size_ -= counts_[j];
           counts_[j] = 0;
         }
         bits_[w] &= ~span;
-        c += n;
+        c += hi - lo + 1;
       }
     }
     base_ = now + 1;
-    while (!later_.empty() && later_.front() < base_ + kWindow) {  // now within the window
-      std::pop_heap(later_.begin(), later_.end(), std::greater<Cycle>());
-      const Cycle t = later_.back();
-      later_.pop_back();
-      if (t < base_) --size_;
-      else add(t);
-    }
+    next_ = findFrom(base_);
+    if (!later_.empty()) pullLater();
   }
 
   // Removes and returns the earliest release; an entry already due returns
@@ -172,17 +168,14 @@ class ReleaseCalendar {
       --due_;
       return base_ - 1;
     }
-    const size_t i0 = size_t(base_ & kMask);
-    for (size_t k = 0; k <= kWords; ++k) {  // from base_'s word round to it again
-      const size_t w = (i0 / 64 + k) % kWords;
-      uint64_t b = bits_[w];
-      if (k == 0) b &= ~uint64_t(0) << (i0 % 64);
-      if (k == kWords) b &= ~(~uint64_t(0) << (i0 % 64));
-      if (b) {
-        const size_t i = w * 64 + size_t(std::countr_zero(b));
-        if (--counts_[i] == 0) bits_[w] &= ~(uint64_t(1) << (i % 64));
-        return base_ + ((Cycle(i) - Cycle(i0)) & kMask);
+    if (next_ != kNone) {
+      const Cycle t = next_;
+      const size_t i = size_t(t & kMask);
+      if (--counts_[i] == 0) {
+        bits_[i / 64] &= ~(uint64_t(1) << (i % 64));
+        next_ = findFrom(t + 1);
       }
+      return t;
     }
     std::pop_heap(later_.begin(), later_.end(), std::greater<Cycle>());
     const Cycle t = later_.back();
@@ -193,16 +186,47 @@ class ReleaseCalendar {
  private:
   static constexpr size_t kWords = kWindow / 64;
   static constexpr Cycle kMask = kWindow - 1;
+  static constexpr Cycle kNone = ~Cycle(0);
   static_assert((kWindow & (kWindow - 1)) == 0 && kWindow >= 64);
-  void add(Cycle t) {
+  void add(Cycle t) {  // base_ <= t < base_ + kWindow
     const size_t i = size_t(t & kMask);
     ++counts_[i];
     bits_[i / 64] |= uint64_t(1) << (i % 64);
+    next_ = std::min(next_, t);
+  }
+  // The earliest cycle in [from, base_ + kWindow) with a count, kNone if none
+  // (base_ <= from): the bitmap from from's bit round to base_'s.
+  Cycle findFrom(Cycle from) const {
+    const Cycle end = base_ + kWindow;
+    if (from >= end) return kNone;
+    const size_t i0 = size_t(from & kMask);
+    const Cycle left = end - from;  // cycles to look at, <= kWindow
+    for (size_t k = 0; k <= kWords; ++k) {
+      const size_t w = (i0 / 64 + k) % kWords;
+      uint64_t b = bits_[w];
+      if (k == 0) b &= ~uint64_t(0) << (i0 % 64);
+      if (b) {
+        const Cycle d = (Cycle(w * 64 + size_t(std::countr_zero(b))) - Cycle(i0)) & kMask;
+        return d < left ? from + d : kNone;
+      }
+    }
+    return kNone;
+  }
+  // Moves the heap's releases that base_'s advance brought into the window.
+  void pullLater() {
+    while (!later_.empty() && later_.front() < base_ + kWindow) {
+      std::pop_heap(later_.begin(), later_.end(), std::greater<Cycle>());
+      const Cycle t = later_.back();
+      later_.pop_back();
+      if (t < base_) --size_;
+      else add(t);
+    }
   }
   std::array<uint32_t, kWindow> counts_{};
   std::array<uint64_t, kWords> bits_{};
   std::vector<Cycle> later_;  // min-heap of releases at base_ + kWindow or later
   Cycle base_ = 1;            // cycles before it are retired; the counts hold [base_, base_ + kWindow)
+  Cycle next_ = kNone;        // the earliest cycle with a count (kNone: none)
   size_t size_ = 0, due_ = 0;
 };
 

@@ -382,14 +382,21 @@ void RopPartition::approximatePhase() {
   // cycle engine), depth tile (EarlyDepth's buffer and DRAM), lock address
   // (ReleaseTable), cache line (BlendArrayCache and DRAM), blend slot (ALU
   // throughput, in issue order). Differences from the cycle engine: DESIGN.md.
+  //
+  // The loop keeps its state (timelines, stage accounts, counters, settings)
+  // in locals and writes it back after the phase: every store through a
+  // pointer (a table entry, a unit's statistic) may alias a member of the same
+  // type, so state kept in members was reloaded after each such store.
   constexpr unsigned kShift = RateLimiter::kShift;
   constexpr int64_t kOne = RateLimiter::kOne;
   constexpr size_t kLookahead = 8;  // records ahead whose lock entry is prefetched
+  constexpr size_t kStages = 5;     // every stage but the resolve
   flushAccounts();  // every stage idle up to here; the timelines account the phase
   const Cycle start = now_;
-  std::array<StageTimeline, 5> tl;
+  std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
-  StageCycles* acc = res_.accounts.stage.data();
+  std::array<StageCycles, kStages> acc;
+  for (size_t i = 0; i < kStages; ++i) acc[i] = res_.accounts.stage[i];
   constexpr StageStatus kBusy = StageStatus::busy();
   const bool grouped = cfg_.lock.per_primitive && cfg_.lock.granularity != LockGranularity::Pixel;
   ReleaseTable locks(owned_.size() * geo_.lock_per_tile, grouped);
@@ -402,6 +409,26 @@ void RopPartition::approximatePhase() {
   const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
   int64_t issue_fx = int64_t(now_) << kShift, alu_fx = 0;
   const Cycle tail = cfg_.lock.release == LockRelease::EndOfShader ? cfg_.lock.shader_tail : 0;
+  const Cycle depth_latency = cfg_.early_depth.latency, hit_latency = cfg_.cache.hit_latency;
+  const bool early_cull = early_cull_;
+  // What a fragment that reaches the lock does follows from its kind,
+  // culled x 4 + outcome: its blend latency, whether it writes its line and
+  // whether it appends an A-buffer node. Visits are tallied by kind, and
+  // the ALU's counts and the skips' follow from the tallies after the phase.
+  constexpr unsigned kKinds = 8;
+  std::array<uint64_t, kKinds> visits{};
+  std::array<Cycle, kKinds> blend_latency{};
+  std::array<uint8_t, kKinds> writes{}, appends{};
+  for (unsigned k = 0; k < kKinds; ++k) {
+    const bool culled = k >= 4;
+    const unsigned outcome = k & 3;
+    blend_latency[k] = alu_.latencyOf(culled ? 0u : rows_of_[outcome]);
+    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
+    appends[k] = !s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
+  }
+  ShaderInput::Draw latency = shader_.draw(pass_);
+  LockStats ls = approx_lock_;
+  uint64_t culled_early = 0, fragments = 0;
   Cycle last_release = now_, last_finish = now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
   std::vector<Cycle> fill_ready(geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
@@ -411,6 +438,7 @@ void RopPartition::approximatePhase() {
       refillInput();
       if (q.empty()) {
         if (!starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", id_));
+        retireCalendars();
         waitForFrontEnd();
         issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
         gap0 = StageStatus::stall(Stall::InputStarved);
@@ -422,9 +450,10 @@ void RopPartition::approximatePhase() {
       __builtin_prefetch(&q.at(2 * kLookahead));
       locks.prefetch(q.at(kLookahead).lock);
     }
-    if (r.flags & InRec::kPassEnd) {
+    if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       q.pop();
+      retireCalendars();
       if (last_release > now_) advance(last_release, false);
       issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
       approx_sb_.reset(now_);
@@ -432,11 +461,16 @@ void RopPartition::approximatePhase() {
       res_.pass_end.push_back(now_);
       gap0 = StageStatus::idle();
       if (++pass_ == front_.passes()) break;
+      latency = shader_.draw(pass_);
       continue;
     }
     // Scoreboard entry: when every one is in use, the earliest release frees one.
+    // The calendars retire lazily: only when the sampler may read them (before
+    // a yield), for a new peak, and here, where a release at or before now_
+    // is popped instead of retired (it frees nothing later than fx), so the
+    // loop pops until the earliest release still in flight is out.
     int64_t fx = issue_fx;
-    if (approx_sb_.size() >= cap) {
+    while (approx_sb_.size() >= cap) {
       const int64_t freed = int64_t(approx_sb_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;
@@ -445,17 +479,17 @@ void RopPartition::approximatePhase() {
     }
     const Cycle issue = Cycle(fx >> kShift);
     issue_fx = fx + in_step;
-    if (issue > now_) advance(issue, false);
-    approx_sb_.retire(now_);
-    approx_waiting_.retire(now_);
+    if (issue > now_) {
+      if (issue >= next_sync_) retireCalendars();  // advance() yields: the sampler reads them
+      advance(issue, false);
+    }
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
 
     const bool culled = (r.flags & InRec::kCulled) != 0;
-    res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & merge_skip_);
-    const Cycle finish = issue + shader_.latency(r.seq, pass_);
+    const Cycle finish = issue + latency(r.seq);
     last_finish = std::max(last_finish, finish);
-    const Cycle passed = finish + cfg_.early_depth.latency;
+    const Cycle passed = finish + depth_latency;
     // Memory-side resources (depth-tile buffer, blend-array cache, DRAM) see
     // the fragment at its visit (issue) cycle, so their requests are booked in
     // time order; the latency they return counts from the fragment's own time.
@@ -463,10 +497,9 @@ void RopPartition::approximatePhase() {
     tl[1].add(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].add(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
-    if (culled && early_cull_) {
-      ++res_.culled_early;
+    if (culled && early_cull) {
+      ++culled_early;
     } else {
-      LockStats& ls = approx_lock_;
       ++ls.arrivals;
       ++ls.entries;
       const Cycle free = locks.enterAfter(r.lock, r.seq - r.prim_offset);
@@ -479,7 +512,9 @@ void RopPartition::approximatePhase() {
         approx_waiting_.push(enter);
       }
       tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
-      const bool write = !culled && r.outcome != uint8_t(model::InsertOutcome::Discarded);
+      const unsigned kind = unsigned(culled) * 4 + (r.outcome & 3u);
+      ++visits[kind];
+      const bool write = writes[kind];
       const Cycle lock_enter = enter;
       // Into the cache the next cycle when admitted on arrival, in the release's
       // own cycle when admitted at one (the cycle engine's stage order).
@@ -491,49 +526,61 @@ void RopPartition::approximatePhase() {
       const uint64_t misses = cache_.stats().misses;
       Cycle at_cache = issue;
       Cycle got = cache_.touch(at_cache, r.tile, write);
-      while (got == kNever) {  // the miss queue is full: retry when its first entry frees
+      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
         if (cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", id_));
         at_cache = std::max(at_cache + 1, cache_.missQueueFreesAt());
         got = cache_.touch(at_cache, r.tile, write);
       }
       enter += at_cache - issue;  // waited for a miss-queue entry
-      Cycle ready = enter + cfg_.cache.hit_latency;
+      Cycle ready = enter + hit_latency;
       if (cache_.stats().misses != misses) {
         ready = got + (enter - at_cache);
         fill_ready[r.tile] = ready;
-      } else if (got > at_cache + cfg_.cache.hit_latency) {
+      } else if (got > at_cache + hit_latency) {
         ready = std::max(ready, fill_ready[r.tile]);
       }
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].add(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
       tl[2].add(acc[2], pass_on, pass_on + 1, kBusy);
-      const bool miss = ready > enter + cfg_.cache.hit_latency;
+      const bool miss = ready > enter + hit_latency;
       tl[3].add(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
       const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
       alu_fx = slot + alu_step;
       const Cycle at = Cycle(slot >> kShift);
       if (at > ready) tl[3].add(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
-      res_.culled_late += culled;
-      const Cycle done = at + alu_.count(culled ? 0u : rows_of_[r.outcome & 3], culled);
+      const Cycle done = at + blend_latency[kind];
       tl[4].add(acc[4], at, done, kBusy);
-      if (!s_.bounded && !culled && r.outcome == uint8_t(model::InsertOutcome::Stored)) nodeWrite();
+      if (appends[kind]) nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);
     }
     last_release = std::max(last_release, release);
     approx_sb_.push(release);
-    approx_lock_.peak_occupancy = std::max(approx_lock_.peak_occupancy, uint32_t(approx_sb_.size()));
+    if (approx_sb_.size() > ls.peak_occupancy) {  // perhaps a new peak: count only those in flight
+      approx_sb_.retire(now_);
+      ls.peak_occupancy = std::max(ls.peak_occupancy, uint32_t(approx_sb_.size()));
+    }
     q.pop();
     front_.popped(id_);
-    ++res_.fragments;
+    ++fragments;
   }
   // Shader busy until the last fragment left it; then every stage idle to the drain.
   tl[0].close(acc[0], last_finish, kBusy);
-  for (size_t i = 0; i < tl.size(); ++i) {
+  for (size_t i = 0; i < kStages; ++i) {
     tl[i].close(acc[i], now_, StageStatus::idle());
-    since_[i] = now_;  // (Resolve: idle through the phase, as before)
+    res_.accounts.stage[i] = acc[i];
+    since_[i] = now_;  // (Resolve: idle through the phase, accounted when its status changes)
   }
+  approx_lock_ = ls;
+  for (unsigned k = 0; k < kKinds; ++k) {
+    const bool culled = k >= 4;
+    alu_.countMany(culled ? 0u : rows_of_[k & 3], culled, visits[k]);
+    if (culled) res_.culled_late += visits[k];
+  }
+  if (merge_skip_) res_.merges_skipped += visits[unsigned(model::InsertOutcome::Stored)];
+  res_.culled_early += culled_early;
+  res_.fragments += fragments;
   approx_sb_.reset(now_);
   approx_waiting_.reset(now_);
 }

@@ -172,6 +172,10 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // cycles of those waiting for the lock (ReleaseCalendars), and its lock figures.
   bool approximate_ = false;
   ReleaseCalendar approx_sb_, approx_waiting_;
+  void retireCalendars() {  // both calendars up to now_ (they retire lazily)
+    approx_sb_.retire(now_);
+    approx_waiting_.retire(now_);
+  }
   LockStats approx_lock_;
   sc_core::sc_event done_event_;
   PartitionResult res_;

@@ -19,6 +19,7 @@ namespace oit::rop {
 
 class ShaderInput {
  public:
+  __extension__ typedef unsigned __int128 U128;  // GCC/Clang extension (mulx)
   explicit ShaderInput(const InputConfig& cfg);
 
   // Pixel-shader latency of the fragment with sequence number `seq` in `pass`
@@ -34,9 +35,32 @@ class ShaderInput {
   // latencyOf() with the per-pass half of the hash computed once per pass
   // (inline: once per fragment).
   unsigned latency(uint64_t seq, unsigned pass) {
-    if (fixed_) return fixed_lat_;
+    if (draw_.fixed) return draw_.fixed_lat;
     if (pass != mix_pass_) newPass(pass);
-    return std::max(1u, cfg_.latency_min + unsigned(modSpan(mix64(pass_mix_ ^ (seq >> warp_shift_)))));
+    return draw_(seq);
+  }
+  // latency() of one pass as a value: the approximate engine keeps it in
+  // registers for the pass (the same draw as latency(), not a copy of it).
+  struct Draw {
+    bool fixed = true;
+    unsigned fixed_lat = 1, min = 0, warp_shift = 0;
+    uint64_t pass_mix = 0, span = 1;
+    // h % span without a 64-bit division (it was the costliest instruction of
+    // the issue): q = mulhi(h, floor(2^64 / span)) is at most 2 below h / span,
+    // so at most two corrections give the exact remainder.
+    uint64_t span_inv = 0;
+    unsigned operator()(uint64_t seq) const {
+      if (fixed) return fixed_lat;
+      const uint64_t h = mix64(pass_mix ^ (seq >> warp_shift));
+      const uint64_t q = uint64_t(U128(h) * span_inv >> 64);
+      uint64_t r = h - q * span;
+      while (r >= span) r -= span;
+      return std::max(1u, min + unsigned(r));
+    }
+  };
+  Draw draw(unsigned pass) {
+    if (!draw_.fixed && pass != mix_pass_) newPass(pass);
+    return draw_;
   }
   static uint64_t mix64(uint64_t z) {  // splitmix64 finaliser
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -58,26 +82,11 @@ class ShaderInput {
   RateLimiter rate_;
   TimingWheel wheel_;
   uint64_t issued_ = 0;
-  bool fixed_ = true;
-  uint64_t span_ = 1;                    // latency_max - latency_min + 1
-  unsigned fixed_lat_ = 1;               // the fixed model's latency
-  unsigned warp_shift_ = 0;              // log2(input.warp_size): seq >> warp_shift_ numbers the warp
-  // h % span_ without a 64-bit division (it was the costliest instruction of
-  // the issue): q = mulhi(h, floor(2^64 / span_)) is at most 2 below h / span_,
-  // so at most two corrections give the exact remainder.
-  __extension__ typedef unsigned __int128 U128;  // GCC/Clang extension (mulx)
-  uint64_t span_inv_ = 0;
-  uint64_t modSpan(uint64_t h) const {
-    const uint64_t q = uint64_t(U128(h) * span_inv_ >> 64);
-    uint64_t r = h - q * span_;
-    while (r >= span_) r -= span_;
-    return r;
-  }
-  unsigned mix_pass_ = ~0u;              // pass whose hash half is in pass_mix_
-  uint64_t pass_mix_ = 0;
+  Draw draw_;                // fixed model, or the uniform model's draw of pass mix_pass_
+  unsigned mix_pass_ = ~0u;  // pass whose hash half is in draw_.pass_mix
   [[gnu::cold, gnu::noinline]] void newPass(unsigned pass) {  // once per pass: out of the inlined issue()
     mix_pass_ = pass;
-    pass_mix_ = mix64(cfg_.seed ^ (uint64_t(pass) << 56));
+    draw_.pass_mix = mix64(cfg_.seed ^ (uint64_t(pass) << 56));
   }
 };
 
