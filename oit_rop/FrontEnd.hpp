@@ -93,6 +93,7 @@ class FrontEnd {
   }
   sc_core::sc_event& drained() { return drained_; }
   void addWaiter() { ++waiters_; }
+  bool hasWaiters() const { return waiters_ != 0; }  // popped() has something to do
 
   // Called about every 2^20 fragments routed: fraction of all passes done.
   void setProgress(std::function<void(double, const std::string&)> f) { progress_ = std::move(f); }

@@ -36,6 +36,23 @@ class Fifo {
   void pop() { head_ = (head_ + 1) & mask_; }
   void clear() { head_ = tail_ = 0; }
 
+  // The consumer's side of the ring in locals, for a loop that pops many
+  // records (the approximate engine): the FIFO's own fields would be reloaded
+  // after every store the loop makes through a pointer. Give the head back
+  // with setHead() before anything else may look at the FIFO, and take a new
+  // cursor() after anything may have pushed to it (or grown it).
+  struct Cursor {
+    const T* ring;
+    size_t mask, head, tail;
+    bool empty() const { return head == tail; }
+    size_t size() const { return (tail - head) & mask; }
+    const T& front() const { return ring[head]; }
+    const T& at(size_t i) const { return ring[(head + i) & mask]; }  // i < size()
+    void pop() { head = (head + 1) & mask; }
+  };
+  Cursor cursor() const { return {buf_.data(), mask_, head_, tail_}; }
+  void setHead(const Cursor& c) { head_ = c.head; }
+
  private:
   [[gnu::noinline, gnu::cold]] void grow() {  // out of the hot callers (rare)
     const size_t n = buf_.size();

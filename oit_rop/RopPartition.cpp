@@ -432,29 +432,38 @@ void RopPartition::approximatePhase() {
   Cycle last_release = now_, last_finish = now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
   std::vector<Cycle> fill_ready(geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
+  // The input queue through a cursor: its head goes back to the queue before
+  // anything else may read it (a refill, a yield, a waiting front end), and a
+  // new cursor is taken after anything may have pushed to it.
   auto& q = front_.queue(id_);
+  auto in = q.cursor();
   for (;;) {
-    if (q.empty()) {
+    if (in.empty()) {
+      q.setHead(in);
       refillInput();
-      if (q.empty()) {
+      in = q.cursor();
+      if (in.empty()) {
         if (!starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", id_));
         retireCalendars();
         waitForFrontEnd();
+        in = q.cursor();
         issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
         gap0 = StageStatus::stall(Stall::InputStarved);
         continue;
       }
     }
-    const InRec r = q.front();  // a copy: advance() lets other partitions refill (and grow) the queue
-    if (q.size() > 2 * kLookahead) {  // the record further ahead, its lock entry nearer
-      __builtin_prefetch(&q.at(2 * kLookahead));
-      locks.prefetch(q.at(kLookahead).lock);
+    const InRec r = in.front();  // a copy: advance() lets other partitions refill (and grow) the queue
+    if (in.size() > 2 * kLookahead) {  // the record further ahead, its lock entry nearer
+      __builtin_prefetch(&in.at(2 * kLookahead));
+      locks.prefetch(in.at(kLookahead).lock);
     }
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
-      q.pop();
+      in.pop();
+      q.setHead(in);
       retireCalendars();
       if (last_release > now_) advance(last_release, false);
+      in = q.cursor();
       issue_fx = std::max(issue_fx, int64_t(now_) << kShift);
       approx_sb_.reset(now_);
       approx_waiting_.reset(now_);
@@ -480,8 +489,14 @@ void RopPartition::approximatePhase() {
     const Cycle issue = Cycle(fx >> kShift);
     issue_fx = fx + in_step;
     if (issue > now_) {
-      if (issue >= next_sync_) retireCalendars();  // advance() yields: the sampler reads them
-      advance(issue, false);
+      if (issue >= next_sync_) {  // advance() yields: the sampler reads the calendars, the front end the queue
+        retireCalendars();
+        q.setHead(in);
+        advance(issue, false);
+        in = q.cursor();
+      } else {
+        advance(issue, false);
+      }
     }
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
@@ -510,8 +525,10 @@ void RopPartition::approximatePhase() {
         ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
         enter = free;
         approx_waiting_.push(enter);
+        // (Without a wait the lock's next interval starts at `early` or later:
+        // a gap up to `early` is accounted there the same way.)
+        tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
-      tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       const unsigned kind = unsigned(culled) * 4 + (r.outcome & 3u);
       ++visits[kind];
       const bool write = writes[kind];
@@ -561,8 +578,11 @@ void RopPartition::approximatePhase() {
       approx_sb_.retire(now_);
       ls.peak_occupancy = std::max(ls.peak_occupancy, uint32_t(approx_sb_.size()));
     }
-    q.pop();
-    front_.popped(id_);
+    in.pop();
+    if (front_.hasWaiters()) {
+      q.setHead(in);
+      front_.popped(id_);
+    }
     ++fragments;
   }
   // Shader busy until the last fragment left it; then every stage idle to the drain.
