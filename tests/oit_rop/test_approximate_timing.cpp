@@ -106,6 +106,35 @@ TEST(ReleaseCalendar, MatchesASortedListAcrossWrapsAndJumps) {
   }
 }
 
+// The engine retires lazily: time moves on without retire(), and a full
+// scoreboard pops releases that are already due. Pops still come in release
+// order, and a late retire() drops exactly the entries due by then.
+TEST(ReleaseCalendar, LazyRetireKeepsPopOrderAndCounts) {
+  ReleaseCalendar c;
+  std::multiset<Cycle> ref;
+  Cycle now = 3;
+  c.reset(now);
+  uint64_t x = 987654321;
+  const auto next = [&x] { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; };
+  for (int i = 0; i < 200000; ++i) {
+    const uint64_t op = next() % 16;
+    if (op < 8) {
+      const Cycle t = now + 1 + next() % (op < 7 ? 400 : 2 * ReleaseCalendar::kWindow);  // always after now
+      c.push(t);
+      ref.insert(t);
+    } else if (op < 11) {
+      now += next() % 7;  // time moves; nothing retired
+    } else if (op == 11) {
+      c.retire(now);
+      ref.erase(ref.begin(), ref.upper_bound(now));
+    } else if (!ref.empty()) {
+      EXPECT_EQ(c.popEarliest(), *ref.begin()) << "step " << i;  // due or not, the earliest
+      ref.erase(ref.begin());
+    }
+    ASSERT_EQ(c.size(), ref.size()) << "step " << i;
+  }
+}
+
 RopConfig approximate(RopConfig c = smallConfig()) {
   c.sim.engine = SimEngine::Approximate;
   return c;

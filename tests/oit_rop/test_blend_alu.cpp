@@ -16,6 +16,27 @@ TEST(BlendAlu, RowsFollowTheOutcomeAndLazyMerge) {
   EXPECT_EQ(BlendAlu::rowsFor(InsertOutcome::Merged, 0, true), 1u);   // accumulator layouts: one "row"
 }
 
+// The approximate engine tallies its visits and counts them at once:
+// countMany(rows, drop, n) is n x count(rows, drop), rows capped at rows_max.
+TEST(BlendAlu, CountManyIsNCounts) {
+  AluConfig c;  // base 8, row 2
+  BlendAlu one(c, 1.0, 4), many(c, 1.0, 4);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(one.count(3, false), 14u);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(one.count(9, false), 16u);  // capped at 4 rows
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(one.count(0, true), 8u);
+  many.countMany(3, false, 5);
+  many.countMany(9, false, 2);
+  many.countMany(0, true, 3);
+  EXPECT_EQ(many.stats().blends, 7u);
+  EXPECT_EQ(many.stats().rows, 5u * 3 + 2u * 4);
+  EXPECT_EQ(many.stats().dropped, 3u);
+  EXPECT_EQ(many.stats().blends, one.stats().blends);
+  EXPECT_EQ(many.stats().rows, one.stats().rows);
+  EXPECT_EQ(many.stats().dropped, one.stats().dropped);
+  EXPECT_EQ(many.latencyOf(9), 16u);
+  EXPECT_EQ(many.latencyOf(1), 10u);
+}
+
 TEST(BlendAlu, Fp32RateQuartersThroughputAndLatencyGrowsWithRows) {
   AluConfig c;  // 2 per clock, base 8, row 2, fp32 x0.25
   oit::model::StateLayout l{4, oit::model::StorageFormat::Fp32, 0, ""};

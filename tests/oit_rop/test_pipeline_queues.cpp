@@ -21,6 +21,35 @@ TEST(PipelineQueues, FifoKeepsOrderAcrossGrowth) {
   EXPECT_TRUE(f.empty());
 }
 
+// The approximate engine reads its input through a Cursor: pops are the
+// cursor's own until setHead(); a new cursor sees what was pushed meanwhile,
+// also after the ring grew (the old cursor's ring is then stale).
+TEST(PipelineQueues, FifoCursorPopsLocallyUntilSetHead) {
+  Fifo<int> f(4);
+  for (int i = 0; i < 3; ++i) f.push(i);
+  auto c = f.cursor();
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c.front(), 0);
+  EXPECT_EQ(c.at(2), 2);
+  c.pop();
+  c.pop();
+  EXPECT_EQ(f.size(), 3u);  // the FIFO does not see the cursor's pops yet
+  f.setHead(c);
+  EXPECT_EQ(f.size(), 1u);
+  EXPECT_EQ(f.front(), 2);
+  for (int i = 3; i < 20; ++i) f.push(i);  // grows (capacity 4 -> 32)
+  c = f.cursor();
+  ASSERT_EQ(c.size(), 18u);
+  for (int i = 2; i < 20; ++i) {
+    ASSERT_FALSE(c.empty());
+    EXPECT_EQ(c.front(), i);
+    c.pop();
+  }
+  EXPECT_TRUE(c.empty());
+  f.setHead(c);
+  EXPECT_TRUE(f.empty());
+}
+
 TEST(PipelineQueues, TimingWheelDeliversAtTheDueCycle) {
   TimingWheel w(16);
   w.schedule(5, 1);

@@ -117,6 +117,27 @@ TEST(ShaderInput, UniformLatencyPinnedValues) {
     EXPECT_EQ(s.latencyOf(p.seq, p.pass), p.latency) << "seq " << p.seq << " pass " << p.pass;
 }
 
+// The approximate engine draws through draw(pass): the same latencies as
+// latencyOf() for every pass, for the uniform model, warps and the fixed model.
+TEST(ShaderInput, DrawOfAPassGivesLatencyOf) {
+  InputConfig uniform;  // Uniform[40, 120]
+  InputConfig warps = uniform;
+  warps.warp_size = 8;
+  warps.latency_min = 3;
+  warps.latency_max = 10;
+  InputConfig fixed = uniform;
+  fixed.latency_model = LatencyModel::Fixed;
+  for (const InputConfig& c : {uniform, warps, fixed}) {
+    ShaderInput s(c);
+    for (unsigned pass : {0u, 1u, 0u, 5u}) {  // a pass drawn again after another
+      const ShaderInput::Draw d = s.draw(pass);
+      for (uint64_t seq : {uint64_t(0), uint64_t(1), uint64_t(7), uint64_t(8), uint64_t(1000003), uint64_t(0xFFFFFFFFull)})
+        EXPECT_EQ(d(seq), s.latencyOf(seq, pass)) << "pass " << pass << " seq " << seq;
+    }
+  }
+  EXPECT_EQ(ShaderInput(fixed).draw(3)(12345), 40u);
+}
+
 // input.warp_size: the fragments of a warp (warp_size consecutive sequence
 // numbers) share one draw, the draw of the warp's number seq >> log2(warp_size).
 TEST(ShaderInput, WarpSharesOneLatency) {
