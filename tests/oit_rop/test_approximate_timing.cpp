@@ -78,31 +78,46 @@ TEST(ReleaseCalendar, RetiresDueReleasesAndPopsTheEarliest) {
   EXPECT_THROW(c.popEarliest(), std::logic_error);
 }
 
+// A ReleaseCalendar beside a multiset of the same releases, driven by a
+// seeded LCG: the randomised tests below differ only in their mix of steps.
+struct CalendarCheck {
+  ReleaseCalendar c;
+  std::multiset<Cycle> ref;
+  Cycle now;
+  uint64_t x;
+  CalendarCheck(Cycle start, uint64_t seed) : now(start), x(seed) { c.reset(now); }
+  uint64_t next() { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; }
+  void push(Cycle t) {
+    c.push(t);
+    ref.insert(t);
+  }
+  void retire() {
+    c.retire(now);
+    ref.erase(ref.begin(), ref.upper_bound(now));
+  }
+  Cycle popReference() {  // the reference's earliest, removed
+    const Cycle t = *ref.begin();
+    ref.erase(ref.begin());
+    return t;
+  }
+};
+
 TEST(ReleaseCalendar, MatchesASortedListAcrossWrapsAndJumps) {
   // A pseudo-random mix of pushes (0 to 3 windows ahead), retires (small
   // steps and jumps past the window) and pops, checked against a multiset.
-  ReleaseCalendar c;
-  std::multiset<Cycle> ref;
-  Cycle now = 7;
-  c.reset(now);
-  uint64_t x = 12345;
-  const auto next = [&x] { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; };
+  CalendarCheck k(7, 12345);
   for (int i = 0; i < 200000; ++i) {
-    const uint64_t op = next() % 16;
+    const uint64_t op = k.next() % 16;
     if (op < 8) {
-      const Cycle t = now + next() % (op < 6 ? 300 : 3 * ReleaseCalendar::kWindow);
-      c.push(t);
-      ref.insert(t);
+      k.push(k.now + k.next() % (op < 6 ? 300 : 3 * ReleaseCalendar::kWindow));
     } else if (op < 13) {
-      now += op == 12 && next() % 64 == 0 ? 2 * ReleaseCalendar::kWindow : next() % 5;
-      c.retire(now);
-      ref.erase(ref.begin(), ref.upper_bound(now));
-    } else if (!ref.empty()) {
-      const Cycle t = c.popEarliest();
-      EXPECT_EQ(t, std::max(*ref.begin(), now)) << "step " << i;  // a due entry reads as `now`
-      ref.erase(ref.begin());
+      k.now += op == 12 && k.next() % 64 == 0 ? 2 * ReleaseCalendar::kWindow : k.next() % 5;
+      k.retire();
+    } else if (!k.ref.empty()) {
+      const Cycle t = k.c.popEarliest();
+      EXPECT_EQ(t, std::max(k.popReference(), k.now)) << "step " << i;  // a due entry reads as `now`
     }
-    ASSERT_EQ(c.size(), ref.size()) << "step " << i;
+    ASSERT_EQ(k.c.size(), k.ref.size()) << "step " << i;
   }
 }
 
@@ -110,28 +125,20 @@ TEST(ReleaseCalendar, MatchesASortedListAcrossWrapsAndJumps) {
 // scoreboard pops releases that are already due. Pops still come in release
 // order, and a late retire() drops exactly the entries due by then.
 TEST(ReleaseCalendar, LazyRetireKeepsPopOrderAndCounts) {
-  ReleaseCalendar c;
-  std::multiset<Cycle> ref;
-  Cycle now = 3;
-  c.reset(now);
-  uint64_t x = 987654321;
-  const auto next = [&x] { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; };
+  CalendarCheck k(3, 987654321);
   for (int i = 0; i < 200000; ++i) {
-    const uint64_t op = next() % 16;
+    const uint64_t op = k.next() % 16;
     if (op < 8) {
-      const Cycle t = now + 1 + next() % (op < 7 ? 400 : 2 * ReleaseCalendar::kWindow);  // always after now
-      c.push(t);
-      ref.insert(t);
+      k.push(k.now + 1 + k.next() % (op < 7 ? 400 : 2 * ReleaseCalendar::kWindow));  // always after now
     } else if (op < 11) {
-      now += next() % 7;  // time moves; nothing retired
+      k.now += k.next() % 7;  // time moves; nothing retired
     } else if (op == 11) {
-      c.retire(now);
-      ref.erase(ref.begin(), ref.upper_bound(now));
-    } else if (!ref.empty()) {
-      EXPECT_EQ(c.popEarliest(), *ref.begin()) << "step " << i;  // due or not, the earliest
-      ref.erase(ref.begin());
+      k.retire();
+    } else if (!k.ref.empty()) {
+      const Cycle t = k.c.popEarliest();
+      EXPECT_EQ(t, k.popReference()) << "step " << i;  // due or not, the earliest
     }
-    ASSERT_EQ(c.size(), ref.size()) << "step " << i;
+    ASSERT_EQ(k.c.size(), k.ref.size()) << "step " << i;
   }
 }
 
