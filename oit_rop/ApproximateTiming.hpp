@@ -51,6 +51,20 @@ class StageTimeline {
     acc.add(s, to - cursor_);
     cursor_ = to;
   }
+  // add() with the gap left out: the gaps are the cycles between the start
+  // and the cursor that no interval covered, accounted at once by addGaps()
+  // (a subtraction at the end instead of a test and an add per interval).
+  void addLeavingGap(StageCycles& acc, Cycle from, Cycle to, StageStatus s) {
+    if (to <= cursor_) return;
+    acc.add(s, to - std::max(from, cursor_));
+    cursor_ = to;
+  }
+  // Accounts the gaps addLeavingGap() left, up to the cursor, as input-starved:
+  // `start` is the timeline's start, `total_at_start` acc's total then.
+  void addGaps(StageCycles& acc, Cycle start, uint64_t total_at_start) const {
+    const uint64_t covered = acc.total() - total_at_start;
+    acc.add(StageStatus::stall(Stall::InputStarved), (cursor_ - start) - covered);
+  }
   // Accounts up to `end` (a gap counts as `tail`); no-op when already there.
   void close(StageCycles& acc, Cycle end, StageStatus tail) {
     if (end > cursor_) {

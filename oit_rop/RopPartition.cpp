@@ -396,7 +396,11 @@ void RopPartition::approximatePhase() {
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
   std::array<StageCycles, kStages> acc;
-  for (size_t i = 0; i < kStages; ++i) acc[i] = res_.accounts.stage[i];
+  std::array<uint64_t, kStages> total_at_start;  // stages 1-4 account their gaps at the end
+  for (size_t i = 0; i < kStages; ++i) {
+    acc[i] = res_.accounts.stage[i];
+    total_at_start[i] = acc[i].total();
+  }
   constexpr StageStatus kBusy = StageStatus::busy();
   const bool grouped = cfg_.lock.per_primitive && cfg_.lock.granularity != LockGranularity::Pixel;
   ReleaseTable locks(owned_.size() * geo_.lock_per_tile, grouped);
@@ -509,8 +513,8 @@ void RopPartition::approximatePhase() {
     // the fragment at its visit (issue) cycle, so their requests are booked in
     // time order; the latency they return counts from the fragment's own time.
     const Cycle early = early_.test(issue, r.tile, (r.flags & InRec::kNeedsDepthRead) != 0) + (finish - issue);
-    tl[1].add(acc[1], finish, passed, kBusy);
-    if (early > passed) tl[1].add(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
+    tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
+    if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
     if (culled && early_cull) {
       ++culled_early;
@@ -525,9 +529,8 @@ void RopPartition::approximatePhase() {
         ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
         enter = free;
         approx_waiting_.push(enter);
-        // (Without a wait the lock's next interval starts at `early` or later:
-        // a gap up to `early` is accounted there the same way.)
-        tl[2].add(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
+        // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
+        tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
       const unsigned kind = unsigned(culled) * 4 + (r.outcome & 3u);
       ++visits[kind];
@@ -558,16 +561,16 @@ void RopPartition::approximatePhase() {
         ready = std::max(ready, fill_ready[r.tile]);
       }
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
-      if (pass_on > lock_enter) tl[2].add(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
-      tl[2].add(acc[2], pass_on, pass_on + 1, kBusy);
+      if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
+      tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
       const bool miss = ready > enter + hit_latency;
-      tl[3].add(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
+      tl[3].addLeavingGap(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
       const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
       alu_fx = slot + alu_step;
       const Cycle at = Cycle(slot >> kShift);
-      if (at > ready) tl[3].add(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
+      if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
       const Cycle done = at + blend_latency[kind];
-      tl[4].add(acc[4], at, done, kBusy);
+      tl[4].addLeavingGap(acc[4], at, done, kBusy);
       if (appends[kind]) nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);
@@ -588,6 +591,7 @@ void RopPartition::approximatePhase() {
   // Shader busy until the last fragment left it; then every stage idle to the drain.
   tl[0].close(acc[0], last_finish, kBusy);
   for (size_t i = 0; i < kStages; ++i) {
+    if (i > 0) tl[i].addGaps(acc[i], start, total_at_start[i]);
     tl[i].close(acc[i], now_, StageStatus::idle());
     res_.accounts.stage[i] = acc[i];
     since_[i] = now_;  // (Resolve: idle through the phase, accounted when its status changes)

@@ -35,6 +35,34 @@ TEST(StageTimeline, AccountsGapsStallsAndBusyOnceEach) {
   EXPECT_EQ(t.cursor(), 30u);
 }
 
+// addLeavingGap() + addGaps() account what add() with input-starved gaps does,
+// on an account that already held cycles (the phase continues its stage's).
+TEST(StageTimeline, GapsLeftForTheEndAccountAsAddDoes) {
+  StageCycles a, b;
+  a.busy = b.busy = 7;
+  a.idle = b.idle = 3;
+  StageTimeline ta(100), tb(100);
+  const uint64_t total_at_start = b.total();
+  uint64_t x = 4242;
+  const auto next = [&x] { return x = x * 6364136223846793005ull + 1442695040888963407ull, x >> 33; };
+  Cycle t = 100;
+  for (int i = 0; i < 10000; ++i) {
+    t += next() % 4;
+    const Cycle from = t + next() % 20, to = from + next() % 30;  // overlapping, out of order, some empty
+    const StageStatus s = next() % 3 == 0 ? StageStatus::stall(Stall(next() % kStallCount)) : StageStatus::busy();
+    ta.add(a, from, to, s);
+    tb.addLeavingGap(b, from, to, s);
+    ASSERT_EQ(ta.cursor(), tb.cursor()) << "step " << i;
+  }
+  tb.addGaps(b, 100, total_at_start);
+  ta.close(a, t + 100, StageStatus::idle());
+  tb.close(b, t + 100, StageStatus::idle());
+  EXPECT_EQ(a.busy, b.busy);
+  EXPECT_EQ(a.idle, b.idle);
+  for (size_t c = 0; c < kStallCount; ++c) EXPECT_EQ(a.stalls[c], b.stalls[c]) << "stall " << c;
+  EXPECT_GT(a.stalls[size_t(Stall::InputStarved)], 0u);
+}
+
 TEST(ReleaseTable, UngroupedWaitsForEveryEarlierRelease) {
   ReleaseTable r(4, false);
   EXPECT_EQ(r.enterAfter(2, 7), 0u);
