@@ -173,6 +173,25 @@ class ReleaseCalendar {
     if (!later_.empty()) pullLater();
   }
 
+  // Drops the releases of the earliest cycle if it is at or before `now`
+  // (and those pushed already due); false when nothing is due. A full
+  // scoreboard calls it before popEarliest(): a bucket at a time is cheaper
+  // than popping its releases one by one.
+  bool dropDue(Cycle now) {
+    if (due_) {
+      size_ -= due_;
+      due_ = 0;
+      return true;
+    }
+    if (next_ > now) return false;  // also kNone
+    const size_t i = size_t(next_ & kMask);
+    size_ -= counts_[i];
+    counts_[i] = 0;
+    bits_[i / 64] &= ~(uint64_t(1) << (i % 64));
+    next_ = findFrom(next_ + 1);
+    return true;
+  }
+
   // Removes and returns the earliest release; an entry already due returns
   // the last retired cycle (every caller compares it with a later time).
   Cycle popEarliest() {

@@ -484,6 +484,7 @@ void RopPartition::approximatePhase() {
     // loop pops until the earliest release still in flight is out.
     int64_t fx = issue_fx;
     while (approx_sb_.size() >= cap) {
+      if (approx_sb_.dropDue(now_)) continue;
       const int64_t freed = int64_t(approx_sb_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;

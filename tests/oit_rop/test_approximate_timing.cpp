@@ -150,8 +150,9 @@ TEST(ReleaseCalendar, MatchesASortedListAcrossWrapsAndJumps) {
 }
 
 // The engine retires lazily: time moves on without retire(), and a full
-// scoreboard pops releases that are already due. Pops still come in release
-// order, and a late retire() drops exactly the entries due by then.
+// scoreboard drops (dropDue) or pops releases that are already due. Pops still
+// come in release order, dropDue() takes exactly the earliest cycle's releases
+// when they are due, and a late retire() drops exactly the entries due by then.
 TEST(ReleaseCalendar, LazyRetireKeepsPopOrderAndCounts) {
   CalendarCheck k(3, 987654321);
   for (int i = 0; i < 200000; ++i) {
@@ -162,6 +163,10 @@ TEST(ReleaseCalendar, LazyRetireKeepsPopOrderAndCounts) {
       k.now += k.next() % 7;  // time moves; nothing retired
     } else if (op == 11) {
       k.retire();
+    } else if (op == 12) {  // drop the earliest cycle's releases if due
+      const bool due = !k.ref.empty() && *k.ref.begin() <= k.now;
+      ASSERT_EQ(k.c.dropDue(k.now), due) << "step " << i;
+      if (due) k.ref.erase(*k.ref.begin());
     } else if (!k.ref.empty()) {
       const Cycle t = k.c.popEarliest();
       EXPECT_EQ(t, k.popReference()) << "step " << i;  // due or not, the earliest
