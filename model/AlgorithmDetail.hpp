@@ -94,8 +94,7 @@ inline void storeAcc(StorageFormat f, const Rgba& v, uint32_t* w) {
       w[1] = uint32_t(encodeHalf(v.b)) | uint32_t(encodeHalf(v.a)) << 16;
       return;
     case StorageFormat::Rgba8T8Z32:
-      w[0] = uint32_t(encodeUnorm8(v.r)) | uint32_t(encodeUnorm8(v.g)) << 8 |
-             uint32_t(encodeUnorm8(v.b)) << 16 | uint32_t(encodeUnorm8(v.a)) << 24;
+      w[0] = encodeUnorm8x4(v.r, v.g, v.b, v.a);
       return;
     case StorageFormat::Fp32: break;
   }

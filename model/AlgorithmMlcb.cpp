@@ -188,8 +188,7 @@ class Mlcb final : public OitAlgorithm {
         q[1] = uint32_t(encodeHalf(l.b)) | spareBits << 16;
         break;
       case StorageFormat::Rgba8T8Z32:
-        q[0] = uint32_t(encodeUnorm8(l.r)) | uint32_t(encodeUnorm8(l.g)) << 8 |
-               uint32_t(encodeUnorm8(l.b)) << 16 | spareBits << 24;
+        q[0] = (encodeUnorm8x4(l.r, l.g, l.b, 0.0f) & 0xFFFFFFu) | spareBits << 24;
         break;
     }
     q[cw_] = asWord(l.z);
