@@ -95,7 +95,8 @@ class ReleaseTable {
   }
   // A fragment a few visits ahead will ask about `address`: its entry is a
   // cache miss (the table spans the partition's pixels), so fetch it now.
-  void prefetch(uint32_t address) const { __builtin_prefetch(&last_[address]); }
+  // (A hint: `address` may be a stale slot's, 0 on an empty table.)
+  void prefetch(uint32_t address) const { __builtin_prefetch(last_.data() + address); }
   // The fragment last asked about at `address` releases it at `release`.
   void released(uint32_t address, Cycle release) { last_[address] = std::max(last_[address], release); }
 

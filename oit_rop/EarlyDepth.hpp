@@ -56,6 +56,14 @@ class EarlyDepth {
       ++stats_.hiz_decided;
     return ready;
   }
+  // test() in two parts for the approximate engine, which tallies its tests
+  // and counts them after the phase: the depth tile's ready cycle (a read
+  // when the buffer lacks it) and the counts test() would have made.
+  Cycle depthTileReady(Cycle now, uint32_t tile) { return depthTile(now, tile); }
+  void countTests(uint64_t tested, uint64_t hiz_decided) {
+    stats_.tested += tested;
+    stats_.hiz_decided += hiz_decided;
+  }
   // Calls f(token) for each fragment leaving the stage at `now` (in order).
   template <class F>
   unsigned leave(Cycle now, F&& f) {

@@ -47,7 +47,7 @@ class Fifo {
     bool empty() const { return head == tail; }
     size_t size() const { return (tail - head) & mask; }
     const T& front() const { return ring[head]; }
-    const T& at(size_t i) const { return ring[(head + i) & mask]; }  // i < size()
+    const T& at(size_t i) const { return ring[(head + i) & mask]; }  // i < size(); past it, an older slot
     void pop() { head = (head + 1) & mask; }
   };
   Cursor cursor() const { return {buf_.data(), mask_, head_, tail_}; }

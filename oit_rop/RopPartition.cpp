@@ -432,7 +432,7 @@ void RopPartition::approximatePhase() {
   }
   ShaderInput::Draw latency = shader_.draw(pass_);
   LockStats ls = approx_lock_;
-  uint64_t culled_early = 0, fragments = 0;
+  uint64_t culled_early = 0, fragments = 0, depth_reads_needed = 0;
   Cycle last_release = now_, last_finish = now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
   std::vector<Cycle> fill_ready(geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
@@ -457,10 +457,11 @@ void RopPartition::approximatePhase() {
       }
     }
     const InRec r = in.front();  // a copy: advance() lets other partitions refill (and grow) the queue
-    if (in.size() > 2 * kLookahead) {  // the record further ahead, its lock entry nearer
-      __builtin_prefetch(&in.at(2 * kLookahead));
-      locks.prefetch(in.at(kLookahead).lock);
-    }
+    // The record further ahead, its lock entry nearer. Slots past the tail hold
+    // older records of this partition (or zeros): their lock addresses are in
+    // the table too, so no test of the queue's size is needed for a hint.
+    __builtin_prefetch(&in.at(2 * kLookahead));
+    locks.prefetch(in.at(kLookahead).lock);
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();
@@ -513,7 +514,13 @@ void RopPartition::approximatePhase() {
     // Memory-side resources (depth-tile buffer, blend-array cache, DRAM) see
     // the fragment at its visit (issue) cycle, so their requests are booked in
     // time order; the latency they return counts from the fragment's own time.
-    const Cycle early = early_.test(issue, r.tile, (r.flags & InRec::kNeedsDepthRead) != 0) + (finish - issue);
+    // (EarlyDepth::test(issue) + (finish - issue), its counts tallied: every
+    // visit is tested, those without a read were decided by the HiZ.)
+    Cycle early = passed;
+    if (r.flags & InRec::kNeedsDepthRead) {
+      ++depth_reads_needed;
+      early = std::max(early, early_.depthTileReady(issue, r.tile) + (finish - issue));
+    }
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
@@ -606,6 +613,7 @@ void RopPartition::approximatePhase() {
   if (merge_skip_) res_.merges_skipped += visits[unsigned(model::InsertOutcome::Stored)];
   res_.culled_early += culled_early;
   res_.fragments += fragments;
+  early_.countTests(fragments, fragments - depth_reads_needed);
   approx_sb_.reset(now_);
   approx_waiting_.reset(now_);
 }

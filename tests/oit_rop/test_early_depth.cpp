@@ -61,3 +61,37 @@ TEST(EarlyDepth, DepthReadBlocksInOrderAndTheTileBufferIsReused) {
   EXPECT_EQ(mem.reads[0], (std::pair<uint64_t, uint32_t>{(1 << 20) + 5 * 256, 256}));
   EXPECT_EQ(e.stats().depth_buffer_hits, 1u);
 }
+
+// The approximate engine's split of test(): depthTileReady() for the fragments
+// the HiZ cannot decide, countTests() afterwards: the same times, reads and counts.
+TEST(EarlyDepth, DepthTileReadyAndCountTestsAreTest) {
+  FakeDram ma, mb;
+  EarlyDepthConfig c;
+  c.latency = 4;
+  EarlyDepth a(c, 2.0, 256, 1 << 20, ma), b(c, 2.0, 256, 1 << 20, mb);
+  struct Visit {
+    Cycle now;
+    uint32_t tile;
+    bool needs_read;
+  };
+  const Visit visits[] = {{10, 3, true}, {11, 3, true}, {11, 5, false}, {12, 19, true}, {13, 3, true}, {200, 35, true}};
+  uint64_t reads_needed = 0;
+  for (const Visit& v : visits) {
+    const Cycle ta = a.test(v.now, v.tile, v.needs_read);
+    Cycle tb = v.now + c.latency;
+    if (v.needs_read) {
+      ++reads_needed;
+      tb = std::max(tb, b.depthTileReady(v.now, v.tile));
+    }
+    EXPECT_EQ(ta, tb) << "tile " << v.tile << " at " << v.now;
+  }
+  b.countTests(std::size(visits), std::size(visits) - reads_needed);
+  EXPECT_EQ(a.stats().tested, b.stats().tested);
+  EXPECT_EQ(a.stats().hiz_decided, b.stats().hiz_decided);
+  EXPECT_EQ(a.stats().depth_reads, b.stats().depth_reads);
+  EXPECT_EQ(a.stats().depth_buffer_hits, b.stats().depth_buffer_hits);
+  EXPECT_EQ(b.stats().tested, 6u);
+  EXPECT_EQ(b.stats().hiz_decided, 1u);
+  EXPECT_EQ(ma.reads, mb.reads);
+  EXPECT_EQ(mb.reads.size(), 4u);  // tiles 3, 19, 35 and 3 again (19 and 35 share 3's slot, 16 entries)
+}
