@@ -17,11 +17,14 @@
 //
 // ReleaseCalendar: the release cycles of the fragments in flight (the
 // scoreboard), as a calendar of per-cycle counts. The engine asks two things
-// of it per fragment: retire everything due by now (time only moves forward)
-// and, when every entry is in use, the earliest release. A binary heap did
-// both in O(log n) with unpredictable branches (~40 % of the engine's time at
-// 2,048 entries); the calendar does them with a bitmap scan over the next
-// kWindow cycles, and keeps the rare later releases in a small heap.
+// of it: retire everything due by now (time only moves forward) and, when
+// every entry is in use, the earliest release. A binary heap did both in
+// O(log n) with unpredictable branches (~40 % of the engine's time at 2,048
+// entries); the calendar keeps the next kWindow cycles as counts with a
+// bitmap and its earliest cycle exact (a retire with nothing due is O(1)),
+// and the rare later releases in a small heap. The engine retires lazily:
+// a full scoreboard drops due cycles (dropDue) or pops, and retire() runs
+// only where the exact count is read (a yield, a new peak).
 #pragma once
 
 #include <algorithm>
