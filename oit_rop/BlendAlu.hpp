@@ -57,21 +57,16 @@ class BlendAlu {
     stats_.blends += !drop;
     stats_.rows += drop ? 0u : rows;
   }
-  // The approximate engine's visit: counts one blend (or drop) like issue(),
-  // without the completion queue; returns its latency.
-  unsigned count(unsigned rows, bool drop) {
-    countMany(rows, drop, 1);
-    return latencyOf(rows);
-  }
-  // count() of n visits at once, without the latency (the approximate engine
-  // tallies its visits by kind and counts them after the phase).
+  // The approximate engine's visits: n blends (or drops) counted like n
+  // issue()s, without the completion queue (the engine tallies its visits by
+  // kind and counts them after the phase).
   void countMany(unsigned rows, bool drop, uint64_t n) {
     rows = std::min(rows, rows_max_);
     stats_.dropped += drop ? n : 0;
     stats_.blends += drop ? 0 : n;
     stats_.rows += drop ? 0 : n * rows;
   }
-  // The latency count() returns for `rows`.
+  // A blend's latency as issue() schedules it, rows capped at rows_max.
   unsigned latencyOf(unsigned rows) const { return latency(std::min(rows, rows_max_)); }
   // Calls f(token) for each blend finishing at `now`.
   template <class F>

@@ -45,20 +45,10 @@ class EarlyDepth {
     last_ready_ = ready;
     q_.push({token, ready, passed});
   }
-  // The approximate engine's visit (no queue, no order): the cycle the fragment
-  // arriving at `now` may leave, counted like push().
-  Cycle test(Cycle now, uint32_t tile, bool needs_read) {
-    ++stats_.tested;
-    Cycle ready = now + cfg_.latency;
-    if (needs_read)
-      ready = std::max(ready, depthTile(now, tile));
-    else
-      ++stats_.hiz_decided;
-    return ready;
-  }
-  // test() in two parts for the approximate engine, which tallies its tests
-  // and counts them after the phase: the depth tile's ready cycle (a read
-  // when the buffer lacks it) and the counts test() would have made.
+  // The approximate engine's visit (no queue, no order) in two parts: it
+  // leaves at max(now + latency, depthTileReady()) when the HiZ could not
+  // decide it (a read when the buffer lacks the tile), and the engine tallies
+  // its tests and adds them after the phase, counted like push().
   Cycle depthTileReady(Cycle now, uint32_t tile) { return depthTile(now, tile); }
   void countTests(uint64_t tested, uint64_t hiz_decided) {
     stats_.tested += tested;

@@ -480,9 +480,9 @@ void RopPartition::approximatePhase() {
     }
     // Scoreboard entry: when every one is in use, the earliest release frees one.
     // The calendars retire lazily: only when the sampler may read them (before
-    // a yield), for a new peak, and here, where a release at or before now_
-    // is popped instead of retired (it frees nothing later than fx), so the
-    // loop pops until the earliest release still in flight is out.
+    // a yield), for a new peak, and here: releases at or before now_ (which
+    // free nothing later than fx) are dropped a cycle at a time until the
+    // scoreboard is not full or its earliest release is still in flight.
     int64_t fx = issue_fx;
     while (approx_sb_.size() >= cap) {
       if (approx_sb_.dropDue(now_)) continue;
@@ -514,8 +514,8 @@ void RopPartition::approximatePhase() {
     // Memory-side resources (depth-tile buffer, blend-array cache, DRAM) see
     // the fragment at its visit (issue) cycle, so their requests are booked in
     // time order; the latency they return counts from the fragment's own time.
-    // (EarlyDepth::test(issue) + (finish - issue), its counts tallied: every
-    // visit is tested, those without a read were decided by the HiZ.)
+    // (Its counts tallied: every visit is tested, those without a read were
+    // decided by the HiZ.)
     Cycle early = passed;
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
