@@ -457,11 +457,14 @@ void RopPartition::approximatePhase() {
       }
     }
     const InRec r = in.front();  // a copy: advance() lets other partitions refill (and grow) the queue
-    // The record further ahead, its lock entry nearer. Slots past the tail hold
-    // older records of this partition (or zeros): their lock addresses are in
-    // the table too, so no test of the queue's size is needed for a hint.
+    // The record further ahead, its lock entry and cache line index nearer.
+    // Slots past the tail hold older records of this partition (or zeros):
+    // their lock addresses and tiles are in the tables too, so no test of the
+    // queue's size is needed for a hint.
     __builtin_prefetch(&in.at(2 * kLookahead));
-    locks.prefetch(in.at(kLookahead).lock);
+    const InRec& ahead = in.at(kLookahead);
+    locks.prefetch(ahead.lock);
+    cache_.prefetch(ahead.tile);
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();

@@ -138,6 +138,35 @@ TEST(ShaderInput, DrawOfAPassGivesLatencyOf) {
   EXPECT_EQ(ShaderInput(fixed).draw(3)(12345), 40u);
 }
 
+// The draw reduces its hash with one multiply and ONE conditional subtract
+// (the quotient estimate is exact or one below): over 200,000 draws per span,
+// including spans of one and powers of two (span_inv rounded down from
+// 2^64 - 1), every draw equals latencyOf()'s true remainder, and for span 81
+// the correction is needed for a large share of the draws (so a missing
+// correction would show).
+TEST(ShaderInput, DrawReductionIsExactWithOneCorrection) {
+  for (auto [lo, hi] : {std::pair{40u, 120u}, {0u, 0u}, {7u, 7u}, {0u, 1u}, {0u, 63u}, {1u, 1024u}, {0u, 6999u}, {100u, 65635u}}) {
+    InputConfig c;
+    c.latency_min = lo;
+    c.latency_max = hi;
+    c.seed = 0x5EEDull + hi;
+    ShaderInput s(c);
+    const ShaderInput::Draw d = s.draw(2);
+    const uint64_t span = uint64_t(hi - lo) + 1;
+    uint64_t corrected = 0;
+    for (uint64_t seq = 0; seq < 200000; ++seq) {
+      const uint64_t h = ShaderInput::mix64(d.pass_mix ^ seq);
+      const uint64_t q = uint64_t(ShaderInput::U128(h) * d.span_inv >> 64);
+      ASSERT_LT(h - q * span, 2 * span) << "span " << span << " seq " << seq;  // q is h / span or one below
+      corrected += h - q * span >= span;
+      ASSERT_EQ(d(seq), s.latencyOf(seq, 2)) << "span " << span << " seq " << seq;
+    }
+    if (span == 81) {
+      EXPECT_GT(corrected, 40000u);  // 2^64 mod 81 = 52: about a third of the draws
+    }
+  }
+}
+
 // input.warp_size: the fragments of a warp (warp_size consecutive sequence
 // numbers) share one draw, the draw of the warp's number seq >> log2(warp_size).
 TEST(ShaderInput, WarpSharesOneLatency) {
