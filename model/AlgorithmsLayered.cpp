@@ -80,12 +80,16 @@ class SortedRows : public OitAlgorithm {
     l.t *= out.t;
   }
   // Front-to-back composite of the rows (eq. 5/6 of the MLAB paper); returns
-  // the remaining transmittance in T.
-  void composite(const uint32_t* w, float& r, float& g, float& b, float& T) const {
+  // the remaining transmittance in T. Per format, as the inserts: the resolve
+  // runs once per pixel of the frame, and a runtime format decoded every row
+  // through a switch.
+  template <StorageFormat F>
+  void compositeAt(const uint32_t* w, float& r, float& g, float& b, float& T) const {
+    constexpr unsigned kRw = rowWords(F);
     r = g = b = 0.0f;
     T = 1.0f;
     for (unsigned i = 0; i < n_; ++i) {
-      const LayerRow row = loadRow(fmt_, w + i * rw_);
+      const LayerRow row = loadRow(F, w + i * kRw);
       if (row.z == kInf) break;  // sorted: only empty rows follow
       r += row.r * T;
       g += row.g * T;
@@ -93,12 +97,20 @@ class SortedRows : public OitAlgorithm {
       T *= row.t;
     }
   }
+  void composite(const uint32_t* w, float& r, float& g, float& b, float& T) const {
+    withFormat([&](auto fmt) { compositeAt<decltype(fmt)::value>(w, r, g, b, T); });
+  }
 
-  // The rows composited over the background (mlab, kbuffer).
-  Rgb resolveRows(const uint32_t* w, Rgb bg) const {
+  // The rows composited over the background (mlab, kbuffer): resolveRowsAt<fmt_>.
+  template <StorageFormat F>
+  Rgb resolveRowsAt(const uint32_t* w, Rgb bg) const {
     float r, g, b, T;
-    composite(w, r, g, b, T);
+    compositeAt<F>(w, r, g, b, T);
     return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
+  }
+  using ResolveFn = Rgb (SortedRows::*)(const uint32_t*, Rgb) const;
+  ResolveFn resolveRowsFn() const {
+    return withFormat([](auto fmt) -> ResolveFn { return &SortedRows::resolveRowsAt<decltype(fmt)::value>; });
   }
 
   StorageFormat fmt_;
@@ -110,7 +122,9 @@ class SortedRows : public OitAlgorithm {
 class Mlab final : public SortedRows {
  public:
   explicit Mlab(const AlgorithmParams& p)
-      : SortedRows(p, p.layers), insert_(withFormat([](auto fmt) { return &Mlab::insertAt<decltype(fmt)::value>; })) {
+      : SortedRows(p, p.layers),
+        insert_(withFormat([](auto fmt) { return &Mlab::insertAt<decltype(fmt)::value>; })),
+        resolve_(resolveRowsFn()) {
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "mlab"; }
@@ -119,9 +133,17 @@ class Mlab final : public SortedRows {
     if (noContribution(f)) return InsertOutcome::Discarded;
     return (this->*insert_)(w, f);
   }
-  Rgb resolve(const uint32_t* w, Rgb bg) override { return resolveRows(w, bg); }
+  InsertFn insertFn() const override {
+    return withFormat([](auto fmt) -> InsertFn { return &Mlab::insertDirect<decltype(fmt)::value>; });
+  }
+  Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
 
  private:
+  template <StorageFormat F>
+  static InsertOutcome insertDirect(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
+    if (noContribution(f)) return InsertOutcome::Discarded;
+    return static_cast<const Mlab&>(a).insertAt<F>(w, f);
+  }
   // The bubble in place (see SortedRows). With k + 1 rows the one falling
   // off merges into the row that ends up last (eq. 7, 8; Z of the nearer).
   // As in the bubble over decoded rows, the fragment's row takes part
@@ -156,6 +178,7 @@ class Mlab final : public SortedRows {
     return InsertOutcome::Merged;
   }
   InsertOutcome (Mlab::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
+  ResolveFn resolve_;                                                 // resolveRowsAt<fmt_>
 };
 
 // ---------------------------------------------------------------- kbuffer
@@ -163,7 +186,8 @@ class KBuffer final : public SortedRows {
  public:
   explicit KBuffer(const AlgorithmParams& p)
       : SortedRows(p, p.layers),
-        insert_(withFormat([](auto fmt) { return &KBuffer::insertAt<decltype(fmt)::value>; })) {
+        insert_(withFormat([](auto fmt) { return &KBuffer::insertAt<decltype(fmt)::value>; })),
+        resolve_(resolveRowsFn()) {
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "kbuffer"; }
@@ -172,9 +196,17 @@ class KBuffer final : public SortedRows {
     if (noContribution(f)) return InsertOutcome::Discarded;
     return (this->*insert_)(w, f);
   }
-  Rgb resolve(const uint32_t* w, Rgb bg) override { return resolveRows(w, bg); }
+  InsertFn insertFn() const override {
+    return withFormat([](auto fmt) -> InsertFn { return &KBuffer::insertDirect<decltype(fmt)::value>; });
+  }
+  Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
 
  private:
+  template <StorageFormat F>
+  static InsertOutcome insertDirect(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
+    if (noContribution(f)) return InsertOutcome::Discarded;
+    return static_cast<const KBuffer&>(a).insertAt<F>(w, f);
+  }
   // The bubble in place (see SortedRows); the furthest of k + 1 rows is dropped.
   template <StorageFormat F>
   InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
@@ -188,6 +220,7 @@ class KBuffer final : public SortedRows {
     return evicts ? InsertOutcome::Merged : InsertOutcome::Stored;
   }
   InsertOutcome (KBuffer::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
+  ResolveFn resolve_;                                                    // resolveRowsAt<fmt_>
 };
 
 // ---------------------------------------------------------------- hybrid

@@ -16,7 +16,6 @@ namespace oit::model {
 
 namespace {
 constexpr uint32_t kDenseLimit = 1u << 20;
-constexpr float kInf = std::numeric_limits<float>::infinity();
 
 [[noreturn]] void badFragment(const FragmentSource& src, uint64_t index, const Fragment& f,
                               const std::string& why) {
@@ -68,32 +67,15 @@ bool DrawClassifier::lookupSparse(uint32_t draw) const {
 
 OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes,
                              const std::function<void(const Fragment&)>& on_opaque) {
-  const TraceHeader& h = src.header();
-  OpaqueLayer o;
-  o.width = h.width;
-  o.height = h.height;
-  const size_t n = size_t(h.width) * h.height;
-  o.depth.assign(n, kInf);
-  o.colour.assign(n, Rgb{0, 0, 0});
-  if (!classes.anyOpaque()) return o;
-  src.rewind();
-  uint64_t index = 0;
-  DrawRun draws(classes);
-  for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
-    for (const Fragment& f : batch) {
-      const size_t p = pixelOf(src, index, f, h.width, h.height);
-      ++index;
-      if (!draws.isOpaque(f.draw)) continue;
-      ++o.fragments;
-      if (on_opaque) on_opaque(f);
-      if (f.z < o.depth[p]) {  // LESS: the first of equal depths wins
-        o.depth[p] = f.z;
-        o.colour[p] = Rgb{f.r, f.g, f.b};
-      }
-    }
-  }
-  return o;
+  if (!on_opaque) return buildOpaqueLayerWith(src, classes, [](const Fragment&) {});
+  return buildOpaqueLayerWith(src, classes, on_opaque);
 }
+
+namespace detail {
+void fragmentOutsideFrame(const FragmentSource& src, uint64_t index, const Fragment& f, uint32_t w, uint32_t h) {
+  badFragment(src, index, f, fmt::format("outside the {}x{} frame", w, h));
+}
+}  // namespace detail
 
 RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo) const {
   const TraceHeader& h = src.header();
@@ -129,6 +111,7 @@ RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo)
     auto& outcomes = counts.pass_outcomes[pass];
     uint64_t index = 0, culled = 0, opaqueSeen = 0, nextReport = opt_.progress_every;
     InsertContext ctx;
+    const OitAlgorithm::InsertFn insert = algo.insertFn();
     DrawRun draws(classes);
     for (auto batch = src.next(); !batch.empty(); batch = src.next()) {
       for (const Fragment& f : batch) {
@@ -144,7 +127,7 @@ RenderResult FunctionalRenderer::render(FragmentSource& src, OitAlgorithm& algo)
           continue;
         }
         ctx.opaque_z = oz;
-        ++outcomes[size_t(algo.insert(state.data() + p * words, f, pass, ctx))];
+        ++outcomes[size_t(insert(algo, state.data() + p * words, f, pass, ctx))];
       }
       if (opt_.progress && index >= nextReport) {
         report(totalPasses - algoPasses + pass, algo.passName(pass), index);

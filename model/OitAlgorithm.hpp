@@ -97,6 +97,17 @@ class OitAlgorithm {
   // submission order.
   virtual InsertOutcome insert(uint32_t* words, const Fragment& f, unsigned pass,
                                const InsertContext& ctx) = 0;
+  // insert() as a plain function, for the frame loops (one insert per
+  // fragment): insertFn()(*this, words, f, pass, ctx) == insert(words, f, pass,
+  // ctx). An algorithm whose insert dispatches again inside (on its storage
+  // format) returns its per-format insert, one indirect call instead of two;
+  // the default calls insert().
+  using InsertFn = InsertOutcome (*)(OitAlgorithm&, uint32_t*, const Fragment&, unsigned, const InsertContext&);
+  virtual InsertFn insertFn() const { return &OitAlgorithm::callInsert; }
+  static InsertOutcome callInsert(OitAlgorithm& a, uint32_t* words, const Fragment& f, unsigned pass,
+                                  const InsertContext& ctx) {
+    return a.insert(words, f, pass, ctx);
+  }
   // After the last pass. Always finite.
   virtual Rgb resolve(const uint32_t* words, Rgb background) = 0;
 

@@ -117,6 +117,7 @@ void FrontEnd::wakeWaiters(unsigned partition) {
 template <bool First, bool Hierarchical>
 void FrontEnd::route(std::span<const Fragment> batch) {
   model::OitAlgorithm& algo = algo_;
+  const model::OitAlgorithm::InsertFn insert = algo.insertFn();
   const unsigned pass = pass_, words = words_;
   const uint32_t width = geo_.width;
   const uint32_t* const tile_row = geo_.tile_row.data();
@@ -199,7 +200,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
       }
     } else {
       ctx.opaque_z = oz;
-      const model::InsertOutcome o = algo.insert(state + size_t(pixel) * words, f, pass, ctx);
+      const model::InsertOutcome o = insert(algo, state + size_t(pixel) * words, f, pass, ctx);
       r.outcome = uint8_t(o);
       ++outcomes[size_t(o)];
       if constexpr (First) {

@@ -129,7 +129,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   if (opt.progress) opt.progress(0.0, "opaque");
   // The opaque phase's work per partition, counted in the same read.
   std::vector<uint64_t> opaque_per_part(geo.partitions, 0);
-  const model::OpaqueLayer opaque = model::buildOpaqueLayer(
+  const model::OpaqueLayer opaque = model::buildOpaqueLayerWith(
       src, classes, [&](const Fragment& f) { ++opaque_per_part[geo.partitionOf(geo.tileOf(f.x, f.y))]; });
 
   FrontEnd front(src, algo, classes, opaque, std::move(opaque_per_part), geo, cfg);

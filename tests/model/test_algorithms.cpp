@@ -390,6 +390,60 @@ TEST(Interface, DirectPerPixelCallsWithoutRenderer) {
   EXPECT_EQ(algo->writeBytes(0, InsertOutcome::Discarded), 0u);
 }
 
+TEST(Interface, InsertFnEqualsInsertForEveryAlgorithm) {
+  // The frame loops insert through insertFn() (mlab and kbuffer: their
+  // per-format insert, no second dispatch): for every algorithm, format and
+  // pass, the same outcomes and words as insert(), so the same resolve.
+  uint64_t stored = 0, merged = 0, discarded = 0;
+  for (const AlgorithmInfo& info : algorithmNames()) {
+    const std::string name(info.name);
+    for (StorageFormat fmt : {StorageFormat::Fp32, StorageFormat::Fp16, StorageFormat::Rgba8T8Z32}) {
+      AlgorithmParams p;
+      p.layers = 3;
+      p.format = fmt;
+      std::unique_ptr<OitAlgorithm> a, b;
+      try {
+        a = makeAlgorithm(name, p);
+        b = makeAlgorithm(name, p);
+      } catch (const std::invalid_argument&) {
+        continue;  // combination not supported by this algorithm
+      }
+      a->beginFrame(header(4, 1));
+      b->beginFrame(header(4, 1));
+      const unsigned w = a->stateWords();
+      std::vector<uint32_t> sa(4 * w), sb(4 * w);
+      a->clearFrame(sa.data(), 4);
+      b->clearFrame(sb.data(), 4);
+      const OitAlgorithm::InsertFn direct = b->insertFn();
+      uint32_t lcg = 12345;
+      const auto next = [&] { return float((lcg = lcg * 1664525u + 1013904223u) >> 8) / float(1 << 24); };
+      for (unsigned pass = 0; pass < a->passes(); ++pass) {
+        lcg = 12345;  // every pass sees the same fragments in the same order
+        InsertContext ctx;
+        for (unsigned i = 0; i < 40; ++i) {
+          const uint16_t x = uint16_t(i % 4);
+          const float z = next(), r = next(), g = next(), bl = next();
+          const float al = i % 9 == 0 ? 0.0f : next();
+          const Fragment f = frag(x, 0, z, r, g, bl, al);
+          const InsertOutcome oa = a->insert(sa.data() + x * w, f, pass, ctx);
+          const InsertOutcome ob = direct(*b, sb.data() + x * w, f, pass, ctx);
+          ASSERT_EQ(oa, ob) << name << " " << toString(fmt) << " pass " << pass << " insert " << i;
+          ASSERT_EQ(sa, sb) << name << " " << toString(fmt) << " pass " << pass << " insert " << i;
+          stored += oa == InsertOutcome::Stored;
+          merged += oa == InsertOutcome::Merged;
+          discarded += oa == InsertOutcome::Discarded;
+        }
+      }
+      for (unsigned x = 0; x < 4; ++x)
+        EXPECT_EQ(a->resolve(sa.data() + x * w, {0.1f, 0.2f, 0.3f}), b->resolve(sb.data() + x * w, {0.1f, 0.2f, 0.3f}))
+            << name << " " << toString(fmt);
+    }
+  }
+  EXPECT_GT(stored, 100u);  // every outcome was compared
+  EXPECT_GT(merged, 100u);
+  EXPECT_GT(discarded, 50u);
+}
+
 TEST(Interface, ClearFrameEqualsPerPixelClear) {
   // clearFrame replicates one clear(): valid only while clear() writes every
   // word with the same pattern for every pixel (renderer and front end rely on it).

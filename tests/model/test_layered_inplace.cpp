@@ -183,11 +183,21 @@ uint64_t compareRandom(const Config& c, uint32_t seed, unsigned pixels, unsigned
     // Long sequences on small k fill every row and keep merging; a few
     // pixels stay short so part-filled states (empty rows) are covered too.
     const unsigned n = px % 4 == 0 ? rng() % (c.k + 2) : length;
+    // insertFn() (the frame loops' per-format insert) on a copy of the state:
+    // the same outcome and words as insert() after every insert.
+    std::vector<uint32_t> w2 = w;
+    const OitAlgorithm::InsertFn direct = algo->insertFn();
     for (unsigned i = 0; i < n; ++i) {
       const Fragment f = randomFragment(rng);
       const InsertOutcome got = algo->insert(w.data(), f, 0, ctx);
+      const InsertOutcome got2 = direct(*algo, w2.data(), f, 0, ctx);
       const InsertOutcome want = ref.insert(f);
       ++compared;
+      if (got2 != got || w2 != w) {
+        ADD_FAILURE() << label(c) << " seed " << seed << " pixel " << px << " insert " << i
+                      << ": insertFn() differs from insert()";
+        return compared;
+      }
       if (got != want || w != ref.words) {
         ADD_FAILURE() << label(c) << " seed " << seed << " pixel " << px << " insert " << i << ": z=" << f.z
                       << " a=" << f.a << " outcome " << toString(got) << " want " << toString(want);
