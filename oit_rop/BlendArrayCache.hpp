@@ -73,14 +73,20 @@ class BlendArrayCache {
   // acquire() and release() at once: a use that pins nothing (the approximate
   // engine, whose fragments hold no line across their blend). kNever as for
   // acquire(); the line is then not pinned either.
-  Cycle touch(Cycle now, uint32_t tile, bool write) {  // inline: once per fragment
+  // `missed`: whether the tile was not resident (an accepted or refused miss).
+  Cycle touch(Cycle now, uint32_t tile, bool write, bool& missed) {  // inline: once per fragment
     const uint32_t index = tile < tiles_ ? line_of_[tile] : kInvalid;
-    if (index == kInvalid) [[unlikely]] {
+    missed = index == kInvalid;
+    if (missed) [[unlikely]] {
       const Cycle ready = miss(now, tile, write);
       if (ready != kNever) release(tile);
       return ready;
     }
     return hit(lines_[index], now, tile, write);
+  }
+  Cycle touch(Cycle now, uint32_t tile, bool write) {
+    bool missed;
+    return touch(now, tile, write, missed);
   }
   // The use of one acquire() of `tile` ended (its blend or resolve is done).
   // Returns true when this made a line of the set of the last refusedBySet()

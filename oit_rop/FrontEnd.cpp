@@ -193,6 +193,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;
+      r.outcome = InRec::kCulledKind;
       if constexpr (First) {
         ++culled;
         ++run.fragments;

@@ -65,7 +65,11 @@ struct InRec {
   uint32_t tile;
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;
-  uint8_t outcome;  // model::InsertOutcome
+  // model::InsertOutcome; kCulledKind for a culled fragment (no insert), so
+  // that `outcome` is the fragment's kind (culled x 4 + outcome), the index
+  // of the approximate engine's per-kind tables.
+  uint8_t outcome;
+  static constexpr uint8_t kCulledKind = 4;
   // seq - first seq of its primitive's run (restarts every 65536 records; 0 when the lock does not group)
   uint16_t prim_offset;
 };

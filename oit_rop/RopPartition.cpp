@@ -420,6 +420,7 @@ void RopPartition::approximatePhase() {
   // whether it appends an A-buffer node. Visits are tallied by kind, and
   // the ALU's counts and the skips' follow from the tallies after the phase.
   constexpr unsigned kKinds = 8;
+  static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
   std::array<Cycle, kKinds> blend_latency{};
   std::array<uint8_t, kKinds> writes{}, appends{};
@@ -530,8 +531,6 @@ void RopPartition::approximatePhase() {
     if (culled && early_cull) {
       ++culled_early;
     } else {
-      ++ls.arrivals;
-      ++ls.entries;
       const Cycle free = locks.enterAfter(r.lock, r.seq - r.prim_offset);
       Cycle enter = early;
       if (free > early) {
@@ -543,7 +542,7 @@ void RopPartition::approximatePhase() {
         // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
         tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
-      const unsigned kind = unsigned(culled) * 4 + (r.outcome & 3u);
+      const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
       ++visits[kind];
       const bool write = writes[kind];
       const Cycle lock_enter = enter;
@@ -554,18 +553,18 @@ void RopPartition::approximatePhase() {
       // counts from the fragment's lock entry; a hit on a line whose fill was
       // in flight waits for that fill's own time (fill_ready), not shifted by
       // its lock wait, which already covered the older fragment that missed.
-      const uint64_t misses = cache_.stats().misses;
       Cycle at_cache = issue;
-      Cycle got = cache_.touch(at_cache, r.tile, write);
+      bool missed;
+      Cycle got = cache_.touch(at_cache, r.tile, write, missed);
       while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
         if (cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", id_));
         at_cache = std::max(at_cache + 1, cache_.missQueueFreesAt());
-        got = cache_.touch(at_cache, r.tile, write);
+        got = cache_.touch(at_cache, r.tile, write, missed);
       }
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
-      if (cache_.stats().misses != misses) {
+      if (missed) {
         ready = got + (enter - at_cache);
         fill_ready[r.tile] = ready;
       } else if (got > at_cache + hit_latency) {
@@ -606,6 +605,10 @@ void RopPartition::approximatePhase() {
     tl[i].close(acc[i], now_, StageStatus::idle());
     res_.accounts.stage[i] = acc[i];
     since_[i] = now_;  // (Resolve: idle through the phase, accounted when its status changes)
+  }
+  for (unsigned k = 0; k < kKinds; ++k) {  // every visit arrived at the lock and entered it
+    ls.arrivals += visits[k];
+    ls.entries += visits[k];
   }
   approx_lock_ = ls;
   for (unsigned k = 0; k < kKinds; ++k) {
