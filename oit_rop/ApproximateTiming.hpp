@@ -96,6 +96,8 @@ class ReleaseTable {
     }
     return before_[address];
   }
+  // enterAfter() of a table without owners (grouped = false): the latest release so far.
+  Cycle lastRelease(uint32_t address) const { return last_[address]; }
   // A fragment a few visits ahead will ask about `address`: its entry is a
   // cache miss (the table spans the partition's pixels), so fetch it now.
   // (A hint: `address` may be a stale slot's, 0 on an empty table.)

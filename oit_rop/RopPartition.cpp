@@ -414,7 +414,9 @@ void RopPartition::approximatePhase() {
   int64_t issue_fx = int64_t(now_) << kShift, alu_fx = 0;
   const Cycle tail = cfg_.lock.release == LockRelease::EndOfShader ? cfg_.lock.shader_tail : 0;
   const Cycle depth_latency = cfg_.early_depth.latency, hit_latency = cfg_.cache.hit_latency;
-  const bool early_cull = early_cull_;
+  // A culled fragment leaves at early depth when early culling is on: its
+  // flag masked by this (one test per visit instead of two).
+  const uint8_t leaves_early = early_cull_ ? InRec::kCulled : 0;
   // What a fragment that reaches the lock does follows from its kind,
   // culled x 4 + outcome: its blend latency, whether it writes its line and
   // whether it appends an A-buffer node. Visits are tallied by kind, and
@@ -511,7 +513,6 @@ void RopPartition::approximatePhase() {
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
 
-    const bool culled = (r.flags & InRec::kCulled) != 0;
     const Cycle finish = issue + latency(r.seq);
     last_finish = std::max(last_finish, finish);
     const Cycle passed = finish + depth_latency;
@@ -528,10 +529,10 @@ void RopPartition::approximatePhase() {
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
-    if (culled && early_cull) {
+    if (r.flags & leaves_early) {
       ++culled_early;
     } else {
-      const Cycle free = locks.enterAfter(r.lock, r.seq - r.prim_offset);
+      const Cycle free = grouped ? locks.enterAfter(r.lock, r.seq - r.prim_offset) : locks.lastRelease(r.lock);
       Cycle enter = early;
       if (free > early) {
         ++ls.conflicts;
