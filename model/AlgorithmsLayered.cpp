@@ -2,7 +2,6 @@
 // All of them insert with MLAB's `f.z <= B[i].z` bubble, so a later-submitted
 // fragment lands in front of stored rows of equal depth (the product's tie rule).
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -46,27 +45,10 @@ class SortedRows : public OitAlgorithm {
   }
   // Where the bubble puts a fragment at depth z: the first row with z <= its
   // depth, n_ when the fragment itself falls off.
-  // rgba8t8z32 (two-word rows) compares four rows' depths at once: the
-  // scalar loop's exit depended on the fragment's depth rank, a branch that
-  // mispredicted about once per insert. The first row with z <= its depth is
-  // the first set bit of the compare's mask (CMPLEPS is false for a NaN z, as
-  // `<=` is); a tail of fewer than four rows is done one by one, so no word
-  // past the pixel is read.
   template <StorageFormat F>
   unsigned slot(const uint32_t* w, float z) const {
     constexpr unsigned kRw = rowWords(F);
     unsigned p = 0;
-#if defined(__SSE2__)
-    if constexpr (kRw == 2) {
-      const __m128 zz = _mm_set1_ps(z);
-      for (; p + 4 <= n_; p += 4) {
-        const __m128 a = _mm_loadu_ps(reinterpret_cast<const float*>(w + p * 2));      // c0 z0 c1 z1
-        const __m128 b = _mm_loadu_ps(reinterpret_cast<const float*>(w + p * 2 + 4));  // c2 z2 c3 z3
-        const int m = _mm_movemask_ps(_mm_cmple_ps(zz, _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1))));
-        if (m) return p + unsigned(std::countr_zero(unsigned(m)));
-      }
-    }
-#endif
     while (p < n_ && !(z <= asFloat(w[p * kRw + kRw - 1]))) ++p;
     return p;
   }
