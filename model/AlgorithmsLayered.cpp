@@ -27,8 +27,22 @@ namespace {
 // reference). The one exception, fp16's Inf / NaN half codes, never comes from
 // encodeHalf; shiftRows still rewrites them as the round trip would.
 class SortedRows : public OitAlgorithm {
+ public:
+  // Every sorted-rows insert: a fragment without contribution is discarded,
+  // the rest go to the derived class's insertAt<fmt_>, picked once
+  // (pickInsert) and handed to the frame loops as their insertFn().
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext& ctx) final {
+    return insert_(*this, w, f, pass, ctx);
+  }
+  InsertFn insertFn() const final { return insert_; }
+
  protected:
   SortedRows(const AlgorithmParams& p, unsigned rows) : fmt_(p.format), rw_(rowWords(p.format)), n_(rows) {}
+  // For the constructor of A (which befriends SortedRows for its insertAt).
+  template <class A>
+  void pickInsert() {
+    insert_ = withFormat([](auto fmt) -> InsertFn { return &insertVia<A, decltype(fmt)::value>; });
+  }
 
   void clearRows(uint32_t* w) const {
     for (unsigned i = 0; i < n_; ++i) storeRow(fmt_, kEmptyRow, w + i * rw_);
@@ -116,34 +130,30 @@ class SortedRows : public OitAlgorithm {
   StorageFormat fmt_;
   unsigned rw_;
   unsigned n_;  // sorted rows
+
+ private:
+  template <class A, StorageFormat F>
+  static InsertOutcome insertVia(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
+    if (noContribution(f)) return InsertOutcome::Discarded;
+    return static_cast<const A&>(a).template insertAt<F>(w, f);
+  }
+  InsertFn insert_ = nullptr;  // insertVia<the derived class, fmt_>
 };
 
 // ---------------------------------------------------------------- mlab
 class Mlab final : public SortedRows {
  public:
   explicit Mlab(const AlgorithmParams& p)
-      : SortedRows(p, p.layers),
-        insert_(withFormat([](auto fmt) { return &Mlab::insertAt<decltype(fmt)::value>; })),
-        resolve_(resolveRowsFn()) {
+      : SortedRows(p, p.layers), resolve_(resolveRowsFn()) {
+    pickInsert<Mlab>();
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "mlab"; }
   void clear(uint32_t* w) override { clearRows(w); }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return (this->*insert_)(w, f);
-  }
-  InsertFn insertFn() const override {
-    return withFormat([](auto fmt) -> InsertFn { return &Mlab::insertDirect<decltype(fmt)::value>; });
-  }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
 
  private:
-  template <StorageFormat F>
-  static InsertOutcome insertDirect(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return static_cast<const Mlab&>(a).insertAt<F>(w, f);
-  }
+  friend class SortedRows;  // pickInsert
   // The bubble in place (see SortedRows). With k + 1 rows the one falling
   // off merges into the row that ends up last (eq. 7, 8; Z of the nearer).
   // As in the bubble over decoded rows, the fragment's row takes part
@@ -177,36 +187,23 @@ class Mlab final : public SortedRows {
     storeRow(F, l, last);
     return InsertOutcome::Merged;
   }
-  InsertOutcome (Mlab::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
-  ResolveFn resolve_;                                                 // resolveRowsAt<fmt_>
+  ResolveFn resolve_;  // resolveRowsAt<fmt_>
 };
 
 // ---------------------------------------------------------------- kbuffer
 class KBuffer final : public SortedRows {
  public:
   explicit KBuffer(const AlgorithmParams& p)
-      : SortedRows(p, p.layers),
-        insert_(withFormat([](auto fmt) { return &KBuffer::insertAt<decltype(fmt)::value>; })),
-        resolve_(resolveRowsFn()) {
+      : SortedRows(p, p.layers), resolve_(resolveRowsFn()) {
+    pickInsert<KBuffer>();
     setLayout({p.layers, p.format, 0, ""});
   }
   std::string_view name() const override { return "kbuffer"; }
   void clear(uint32_t* w) override { clearRows(w); }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return (this->*insert_)(w, f);
-  }
-  InsertFn insertFn() const override {
-    return withFormat([](auto fmt) -> InsertFn { return &KBuffer::insertDirect<decltype(fmt)::value>; });
-  }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
 
  private:
-  template <StorageFormat F>
-  static InsertOutcome insertDirect(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return static_cast<const KBuffer&>(a).insertAt<F>(w, f);
-  }
+  friend class SortedRows;  // pickInsert
   // The bubble in place (see SortedRows); the furthest of k + 1 rows is dropped.
   template <StorageFormat F>
   InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
@@ -219,8 +216,7 @@ class KBuffer final : public SortedRows {
     // Merged: kept, but an older row was evicted to make room.
     return evicts ? InsertOutcome::Merged : InsertOutcome::Stored;
   }
-  InsertOutcome (KBuffer::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
-  ResolveFn resolve_;                                                    // resolveRowsAt<fmt_>
+  ResolveFn resolve_;  // resolveRowsAt<fmt_>
 };
 
 // ---------------------------------------------------------------- hybrid
@@ -231,8 +227,8 @@ class Hybrid final : public SortedRows {
  public:
   explicit Hybrid(const AlgorithmParams& p)
       : SortedRows(p, p.layers - 1),
-        packed_(p.format != StorageFormat::Fp32),
-        insert_(withFormat([](auto fmt) { return &Hybrid::insertAt<decltype(fmt)::value>; })) {
+        packed_(p.format != StorageFormat::Fp32) {
+    pickInsert<Hybrid>();
     tail_at_ = n_ * rw_;
     setLayout({n_, p.format, packed_ ? 2u : 5u,
                packed_ ? "packed tail (colour 3x10 bit, alpha_sum fp16, count 16 bit)"
@@ -242,10 +238,6 @@ class Hybrid final : public SortedRows {
   void clear(uint32_t* w) override {
     clearRows(w);
     storeTail(w + tail_at_, HybridTail{0, 0, 0, 0, 0});
-  }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return (this->*insert_)(w, f);
   }
   Rgb resolve(const uint32_t* w, Rgb bg) override {
     float r, g, b, T;
@@ -267,6 +259,7 @@ class Hybrid final : public SortedRows {
   }
 
  private:
+  friend class SortedRows;  // pickInsert
   // The bubble in place over the k - 1 core rows (see SortedRows). The row
   // falling off is the fragment's unquantised row when it lands behind every
   // row, else the old last row (z = +inf: empty, nothing to add).
@@ -312,7 +305,6 @@ class Hybrid final : public SortedRows {
     w[4] = t.count;
   }
   bool packed_;
-  InsertOutcome (Hybrid::*insert_)(uint32_t*, const Fragment&) const;  // insertAt<fmt_>
   unsigned tail_at_ = 0;
 };
 

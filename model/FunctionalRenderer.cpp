@@ -24,8 +24,7 @@ constexpr uint32_t kDenseLimit = 1u << 20;
 }
 
 size_t pixelOf(const FragmentSource& src, uint64_t index, const Fragment& f, uint32_t w, uint32_t h) {
-  if (f.x >= w || f.y >= h)
-    badFragment(src, index, f, fmt::format("outside the {}x{} frame", w, h));
+  if (f.x >= w || f.y >= h) detail::fragmentOutsideFrame(src, index, f, w, h);
   return size_t(f.y) * w + f.x;
 }
 }  // namespace
@@ -65,10 +64,8 @@ bool DrawClassifier::lookupSparse(uint32_t draw) const {
   return it->second;
 }
 
-OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes,
-                             const std::function<void(const Fragment&)>& on_opaque) {
-  if (!on_opaque) return buildOpaqueLayerWith(src, classes, [](const Fragment&) {});
-  return buildOpaqueLayerWith(src, classes, on_opaque);
+OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes) {
+  return buildOpaqueLayerWith(src, classes, [](const Fragment&) {});
 }
 
 namespace detail {

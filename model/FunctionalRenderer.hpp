@@ -96,19 +96,19 @@ struct OpaqueLayer {
   bool landed(size_t pixel) const { return depth[pixel] != std::numeric_limits<float>::infinity(); }
 };
 // Rewinds the source and reads it once. Throws std::runtime_error for a
-// fragment outside the frame or of an unknown draw. `on_opaque`, when set, sees
-// every opaque fragment of that read (the timing model counts its per-partition
-// work there instead of reading the trace again).
-OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes,
-                             const std::function<void(const Fragment&)>& on_opaque = {});
+// fragment outside the frame or of an unknown draw.
+OpaqueLayer buildOpaqueLayer(FragmentSource& src, const DrawClassifier& classes);
 
 namespace detail {
+// Throws the "outside the WxH frame" error naming the source and the fragment.
 [[noreturn]] void fragmentOutsideFrame(const FragmentSource& src, uint64_t index, const Fragment& f, uint32_t w,
                                        uint32_t h);
 }
-// buildOpaqueLayer() with the per-opaque-fragment call inlined: the pre-pass
-// reads every record of the trace, and a std::function call per opaque
-// fragment (the timing model's per-partition count) showed in its profile.
+// buildOpaqueLayer() that also calls on_opaque(f) for every opaque fragment of
+// the read (the timing model counts its per-partition work there instead of
+// reading the trace again). A template, so the call is inlined: the pre-pass
+// reads every record, and a std::function call per opaque fragment showed in
+// its profile.
 template <class OnOpaque>
 OpaqueLayer buildOpaqueLayerWith(FragmentSource& src, const DrawClassifier& classes, OnOpaque&& on_opaque) {
   const TraceHeader& hd = src.header();

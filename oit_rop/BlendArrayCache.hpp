@@ -84,10 +84,6 @@ class BlendArrayCache {
     }
     return hit(lines_[index], now, tile, write);
   }
-  Cycle touch(Cycle now, uint32_t tile, bool write) {
-    bool missed;
-    return touch(now, tile, write, missed);
-  }
   // The use of one acquire() of `tile` ended (its blend or resolve is done).
   // Returns true when this made a line of the set of the last refusedBySet()
   // acquire free (the refused access may now be retried).

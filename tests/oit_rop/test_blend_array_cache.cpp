@@ -623,7 +623,8 @@ TEST(BlendArrayCache, TouchIsAcquireThenRelease) {
     now += rng(4);
     const uint32_t tile = uint32_t(rng(24));
     const bool write = rng(2) != 0;
-    const Cycle ta = use(a, now, tile, write), tb = b.touch(now, tile, write);
+    bool missed;
+    const Cycle ta = use(a, now, tile, write), tb = b.touch(now, tile, write, missed);
     ASSERT_EQ(ta, tb) << "access " << i;
     refused += ta == kNever;
     ASSERT_EQ(b.linesInUse(), 0u);
