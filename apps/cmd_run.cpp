@@ -19,7 +19,7 @@
 #include "apps/Progress.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
-#include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
 #include "traces/TempFiles.hpp"

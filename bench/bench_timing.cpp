@@ -34,7 +34,7 @@
 #include "model/FunctionalRenderer.hpp"
 #include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
-#include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 
 using namespace oit;

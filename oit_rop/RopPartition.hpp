@@ -20,14 +20,14 @@
 #include <memory>
 #include <vector>
 
-#include "oit_rop/ApproximateTiming.hpp"
-#include "oit_rop/BlendAlu.hpp"
-#include "oit_rop/BlendArrayCache.hpp"
-#include "oit_rop/DramSystem.hpp"
-#include "oit_rop/EarlyDepth.hpp"
-#include "oit_rop/FrontEnd.hpp"
-#include "oit_rop/PixelLock.hpp"
-#include "oit_rop/ShaderInput.hpp"
+#include "oit_rop/engines/ApproximateTiming.hpp"
+#include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/memory/BlendArrayCache.hpp"
+#include "oit_rop/memory/DramSystem.hpp"
+#include "oit_rop/stages/EarlyDepth.hpp"
+#include "oit_rop/stages/FrontEnd.hpp"
+#include "oit_rop/stages/PixelLock.hpp"
+#include "oit_rop/stages/ShaderInput.hpp"
 #include "oit_rop/TimingStats.hpp"
 
 namespace oit::rop {

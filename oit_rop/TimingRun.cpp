@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <tlm>
 
-#include "oit_rop/BlendAlu.hpp"
-#include "oit_rop/FrontEnd.hpp"
+#include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/OitRop.hpp"
 
 namespace oit::rop {

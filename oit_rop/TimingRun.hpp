@@ -14,7 +14,7 @@
 #include "model/FunctionalRenderer.hpp"
 #include "model/Image.hpp"
 #include "model/OitAlgorithm.hpp"
-#include "oit_rop/RopConfig.hpp"
+#include "oit_rop/config/RopConfig.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::rop {

@@ -15,8 +15,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "RopTestUtil.hpp"
-#include "oit_rop/FrontEnd.hpp"
+#include "oit_rop/RopTestUtil.hpp"
+#include "oit_rop/stages/FrontEnd.hpp"
 
 using namespace oit;
 using namespace oit::rop;

@@ -1,0 +1,855 @@
+// DRAM model: expectations are derived by hand from the formulas in
+// oit_rop/memory/MEMORY.md, mostly on a "round" configuration where every timing is a
+// whole number of core cycles (1000 MHz core, tCK 1 ns, 16 B per cycle).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "oit_rop/TestLcg.hpp"
+#include "oit_rop/memory/MemorySystem.hpp"
+
+namespace oit::rop {
+namespace {
+
+// 1 core cycle = 1 ns = 1 DRAM clock; 16 GB/s = 16 B/cycle -> a 64 B burst is 4
+// cycles; controller 40, CL = tRCD = tRP = 11 cycles.
+DramConfig roundConfig(unsigned channels) {
+  DramConfig c;
+  c.channels = channels;
+  c.channel_gbps = 16.0;
+  c.tck_ns = 1.0;
+  c.cl = c.trcd = c.trp = 11;
+  c.banks = 8;
+  c.row_bytes = 8192;
+  c.burst_bytes = 64;
+  c.interleave_bytes = 256;
+  c.open_row = true;
+  c.controller_ns = 40.0;
+  c.bank_hash = false;  // the hand-derived expectations use the plain [row | bank | column] map
+  c.tras = 0;           // and no tRAS limit (tRAS has its own tests)
+  return c;
+}
+constexpr double kRoundMhz = 1000.0;
+constexpr Cycle kCtrl = 40, kCl = 11, kTrcd = 11, kTrp = 11, kBurst = 4;
+
+TEST(MemorySystem, DerivedTimingsOfRoundConfig) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  EXPECT_DOUBLE_EQ(m.bytesPerCyclePerChannel(), 16.0);
+  EXPECT_DOUBLE_EQ(m.peakBytesPerCycle(), 32.0);
+  EXPECT_DOUBLE_EQ(m.controllerCycles(), 40.0);
+  EXPECT_DOUBLE_EQ(m.clCycles(), 11.0);
+  EXPECT_DOUBLE_EQ(m.burstCycles(), 4.0);
+}
+
+TEST(MemorySystem, IgpuPresetConversions) {
+  // DDR3-1600 at 1150 MHz core: 12.8 GB/s -> 11.13 B/cycle, a 64 B burst 5.75
+  // cycles, 11 tCK of 1.25 ns = 13.75 ns = 15.8125 cycles, 40 ns = 46 cycles.
+  MemorySystem m(DramConfig{}, 1150.0);
+  EXPECT_NEAR(m.bytesPerCyclePerChannel(), 12.8e9 / 1150e6, 1e-12);
+  EXPECT_NEAR(m.peakBytesPerCycle(), 2 * 12.8e9 / 1150e6, 1e-12);
+  EXPECT_DOUBLE_EQ(m.burstCycles(), 5.75);
+  EXPECT_DOUBLE_EQ(m.clCycles(), 15.8125);
+  EXPECT_DOUBLE_EQ(m.controllerCycles(), 46.0);
+  // Closed bank: ceil(46 + 2 * 15.8125 + 5.75) = ceil(83.375) = 84.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 84u);
+}
+
+// A bandwidth too low for the tick arithmetic is refused as such (a vanishing
+// bandwidth used to overflow to 0 ticks and be reported as "too high"; the
+// configuration's ranges and its burst-time check keep runs far from both ends).
+TEST(MemorySystem, RefusesBandwidthsTheTicksCannotHold) {
+  auto messageOf = [](double gbps, double mhz) {
+    DramConfig c = roundConfig(1);
+    c.channel_gbps = gbps;
+    try {
+      MemorySystem m(c, mhz);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(messageOf(1e-300, kRoundMhz).find("channel_gbps too low"), std::string::npos) << messageOf(1e-300, kRoundMhz);
+  EXPECT_NE(messageOf(1e-12, kRoundMhz).find("channel_gbps too low"), std::string::npos);
+  EXPECT_EQ(messageOf(0.1, 1.0), "no error");  // the configurable extremes
+  EXPECT_EQ(messageOf(10000, 10000), "no error");
+}
+
+TEST(MemorySystem, SingleReadLatencyClosedBankRowHitAndRowMiss) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  // Nothing open yet: controller + tRCD + CL + one burst.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);
+  // Same row (bank 0, row 0), long after: controller + CL + burst.
+  EXPECT_EQ(m.access(1000, 64, 64, false, Surface::Depth), 1000 + kCtrl + kCl + kBurst);
+  // Bank 0, row 1 (1 channel: 8 banks x 8 KiB per row index): precharge too.
+  ASSERT_EQ(m.bankOf(65536), 0u);
+  ASSERT_EQ(m.rowOf(65536), 1u);
+  EXPECT_EQ(m.access(2000, 65536, 64, false, Surface::Depth), 2000 + kCtrl + kTrp + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 1u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().requests, 3u);
+  EXPECT_EQ(m.stats().last_completion, 2000 + kCtrl + kTrp + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, WritesUseTheSameLatency) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, true, Surface::Colour), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().write_bytes[unsigned(Surface::Colour)], 64u);
+  EXPECT_EQ(m.stats().readBytes(), 0u);
+}
+
+TEST(MemorySystem, PartialBurstCostsAFullBurstButCountsExactBytes) {
+  // DRAM moves whole bursts: 32 B take a 64 B burst's bus time.
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 32, false, Surface::Resolve), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().channel_busy[0], kBurst);
+  EXPECT_EQ(m.stats().read_bytes[unsigned(Surface::Resolve)], 32u);
+  // 64 B straddling a burst boundary are two bursts.
+  m.access(1000, 96, 64, false, Surface::Resolve);
+  EXPECT_EQ(m.stats().channel_busy[0], 3 * kBurst);
+}
+
+TEST(MemorySystem, MovingBytesTakesAtLeastBytesOverBandwidth) {
+  for (unsigned channels : {1u, 2u, 4u}) {
+    for (uint32_t bytes : {64u * 1024u, 256u * 1024u, 1024u * 1024u, 4096u * 1024u}) {
+      MemorySystem m(roundConfig(channels), kRoundMhz);
+      const Cycle done = m.access(0, 0, bytes, false, Surface::BlendArrays);
+      const double lower = bytes / m.peakBytesPerCycle();
+      EXPECT_GE(double(done), lower) << channels << " ch, " << bytes << " B";
+      // Open rows, row-major mapping: every row change of a bank is hidden behind
+      // the other banks' transfers, so the bus never idles after the first
+      // activate: done = controller + tRCD + CL + bytes / peak, exactly.
+      EXPECT_EQ(done, kCtrl + kTrcd + kCl + Cycle(lower)) << channels << " ch, " << bytes << " B";
+      for (unsigned c = 0; c < channels; ++c) EXPECT_EQ(m.stats().channel_busy[c], Cycle(lower));
+    }
+  }
+}
+
+TEST(MemorySystem, BandwidthBoundHoldsForManySmallRequestsOnIgpuPreset) {
+  // 4096 back-to-back 64 B reads issued in the same cycle: the two channels at
+  // 11.13 B/cycle each cannot finish before bytes / peak cycles.
+  for (unsigned channels : {1u, 2u}) {
+    DramConfig c;
+    c.channels = channels;
+    MemorySystem m(c, 1150.0);
+    Cycle done = 0;
+    for (uint64_t i = 0; i < 4096; ++i) done = std::max(done, m.access(0, i * 64, 64, false, Surface::BlendArrays));
+    const double lower = 4096.0 * 64 / m.peakBytesPerCycle();
+    EXPECT_GE(double(done), lower);
+    EXPECT_LE(double(done), lower + 100.0);  // plus one unloaded latency (~84), not more
+    EXPECT_EQ(m.stats().last_completion, done);
+  }
+}
+
+TEST(MemorySystem, OpenRowBeatsClosedRowOnASequentialStream) {
+  // 8 KiB, 1 channel: one row of bank 0, 128 bursts.
+  DramConfig open_cfg = roundConfig(1);
+  DramConfig closed_cfg = open_cfg;
+  closed_cfg.open_row = false;
+  MemorySystem open(open_cfg, kRoundMhz), closed(closed_cfg, kRoundMhz);
+  // Open: one activate, then the bus streams 128 bursts.
+  EXPECT_EQ(open.access(0, 0, 8192, false, Surface::Depth), kCtrl + kTrcd + kCl + 128 * kBurst);
+  // Closed: every burst activates bank 0 again after the previous burst's data
+  // and auto-precharge: first burst ends at tRCD+CL+burst, each further one
+  // tRP + tRCD + CL + burst later.
+  EXPECT_EQ(closed.access(0, 0, 8192, false, Surface::Depth),
+            kCtrl + (kTrcd + kCl + kBurst) + 127 * (kTrp + kTrcd + kCl + kBurst));
+  EXPECT_EQ(open.stats().row_hits, 127u);
+  EXPECT_EQ(open.stats().row_misses, 1u);
+  EXPECT_EQ(closed.stats().row_hits, 0u);
+  EXPECT_EQ(closed.stats().row_misses, 128u);
+  // Closed policy, isolated access to the row just used: tRCD + CL, never a hit.
+  EXPECT_EQ(closed.access(100000, 0, 64, false, Surface::Depth), 100000 + kCtrl + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, RowHitsOfASequentialStreamCountedByHand) {
+  // 2 channels, 64 KiB as 1024 requests of 64 B: each channel gets 32 KiB of
+  // its local space = 4 rows (banks 0..3, row 0): 8 misses, 1016 hits.
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  for (uint64_t i = 0; i < 1024; ++i) m.access(i, i * 64, 64, false, Surface::BlendArrays);
+  EXPECT_EQ(m.stats().row_misses, 8u);
+  EXPECT_EQ(m.stats().row_hits, 1016u);
+  EXPECT_EQ(m.stats().requests, 1024u);
+
+  // 1 channel, 128 KiB: row 0 of all 8 banks, then row 1 of all 8 banks.
+  MemorySystem one(roundConfig(1), kRoundMhz);
+  one.access(0, 0, 128 * 1024, false, Surface::BlendArrays);
+  EXPECT_EQ(one.stats().row_misses, 16u);
+  EXPECT_EQ(one.stats().row_hits, 2048u - 16u);
+}
+
+TEST(MemorySystem, AddressMapping) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  // Channel from the interleave bits.
+  EXPECT_EQ(m.channelOf(0), 0u);
+  EXPECT_EQ(m.channelOf(255), 0u);
+  EXPECT_EQ(m.channelOf(256), 1u);
+  EXPECT_EQ(m.channelOf(3 * 256 + 17), 3u);
+  EXPECT_EQ(m.channelOf(4 * 256), 0u);
+  // Channel-local address 8192 (bank 1) = global chunk 32 * 4 -> 32768.
+  EXPECT_EQ(m.bankOf(32767), 0u);
+  EXPECT_EQ(m.bankOf(32768), 1u);
+  EXPECT_EQ(m.rowOf(32768), 0u);
+  // Local 8 banks * 8 KiB = 64 KiB -> row 1 of bank 0 at global 256 KiB.
+  EXPECT_EQ(m.bankOf(256 * 1024), 0u);
+  EXPECT_EQ(m.rowOf(256 * 1024), 1u);
+  EXPECT_EQ(m.channelOf(256 * 1024), 0u);
+}
+
+// tRAS: a row stays open at least tRAS after its activate. Round config with
+// tRAS = 28: row 0 of bank 0 opens at 40 (controller), its data ends at 66; a
+// conflicting row may start its precharge only at 40 + 28 = 68, not 66.
+TEST(MemorySystem, TrasDelaysThePrechargeOfAConflictingRow) {
+  for (unsigned tras : {0u, 28u}) {
+    DramConfig c = roundConfig(1);
+    c.tras = tras;
+    MemorySystem m(c, kRoundMhz);
+    EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);  // 66
+    const Cycle pre = tras ? kCtrl + tras : kCtrl + kTrcd + kCl + kBurst;               // 68 or 66
+    EXPECT_EQ(m.access(0, 65536, 64, false, Surface::Depth), pre + kTrp + kTrcd + kCl + kBurst) << tras;
+  }
+}
+
+// Closed rows: each burst of a run re-activates once the previous data ended
+// and its row was open tRAS, plus tRP. Three bursts, tRAS 40: activates at 40,
+// max(66, 80) + 11 = 91 and max(117, 131) + 11 = 142; data of the last at
+// 142 + 22 = 164 .. 168. (Without tRAS: every step is tRP + tRCD + CL + burst.)
+TEST(MemorySystem, TrasSpacesTheActivatesOfAClosedRowRun) {
+  DramConfig c = roundConfig(1);
+  c.open_row = false;
+  c.tras = 40;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 192, false, Surface::BlendArrays), 168u);
+  c.tras = 0;
+  MemorySystem none(c, kRoundMhz);
+  EXPECT_EQ(none.access(0, 0, 192, false, Surface::BlendArrays), kCtrl + 3 * (kTrcd + kCl + kBurst) + 2 * kTrp);
+}
+
+// dram.bank_hash: for a fixed row the bank map stays a bijection (a stream
+// still walks every bank), and the row's bits move the bank.
+TEST(MemorySystem, BankHashPermutesTheBanksOfEveryRow) {
+  for (unsigned banks : {8u, 6u}) {
+    DramConfig c = roundConfig(1);
+    c.banks = banks;
+    c.bank_hash = true;
+    MemorySystem m(c, kRoundMhz);
+    const uint64_t row_group = uint64_t(banks) * c.row_bytes;  // one row index across the banks
+    for (uint64_t row : {uint64_t(0), uint64_t(1), uint64_t(5), uint64_t(1) << 20, (uint64_t(1) << 27) + 3}) {
+      std::vector<int> seen(banks, 0);
+      for (unsigned b = 0; b < banks; ++b) {
+        const uint64_t addr = row * row_group + uint64_t(b) * c.row_bytes;
+        ASSERT_EQ(m.rowOf(addr), row);
+        ++seen[m.bankOf(addr)];
+      }
+      for (unsigned b = 0; b < banks; ++b) EXPECT_EQ(seen[b], 1) << banks << " banks, row " << row << ", bank " << b;
+    }
+  }
+  // By hand: 8 banks, row 1 -> bank index XOR 1; row 2^20 -> XOR (1 << (20 % 3)) = 4.
+  DramConfig c = roundConfig(1);
+  c.bank_hash = true;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.bankOf(65536), 1u);
+  EXPECT_EQ(m.bankOf(65536 + 3 * 8192), 2u);
+  EXPECT_EQ(m.bankOf(uint64_t(65536) << 20), 4u);
+  // 6 banks (digit sum): row 7 = digits 1, 1 -> bank index + 2 (mod 6).
+  c.banks = 6;
+  MemorySystem six(c, kRoundMhz);
+  EXPECT_EQ(six.bankOf(7 * 6 * 8192 + 5 * 8192), (5u + 2u) % 6u);
+}
+
+// Two sequential streams a partition region apart (2^36 B) read alternately:
+// with the plain map both sit in bank 0 on different rows and every access
+// reopens a row; hashed, the second stream is in bank 4 and only the two
+// first accesses open one.
+TEST(MemorySystem, BankHashKeepsInterleavedStreamsOnTheirOwnRows) {
+  for (bool hash : {false, true}) {
+    DramConfig c = roundConfig(1);
+    c.bank_hash = hash;
+    MemorySystem m(c, kRoundMhz);
+    const uint64_t other = uint64_t(1) << 36;
+    for (uint64_t i = 0; i < 128; ++i) {  // 128 x 64 B = one 8 KiB row per stream
+      m.access(i * 100, i * 64, 64, false, Surface::BlendArrays);
+      m.access(i * 100 + 50, other + i * 64, 64, false, Surface::BlendArrays);
+    }
+    EXPECT_EQ(m.bankOf(other), hash ? 4u : 0u);
+    EXPECT_EQ(m.stats().row_misses, hash ? 2u : 256u) << (hash ? "hashed" : "plain");
+    EXPECT_EQ(m.stats().row_hits, hash ? 254u : 0u) << (hash ? "hashed" : "plain");
+  }
+}
+
+TEST(MemorySystem, NonPowerOfTwoGeometryMapsConsistently) {
+  DramConfig c = roundConfig(3);
+  c.banks = 6;
+  MemorySystem m(c, kRoundMhz);
+  EXPECT_EQ(m.channelOf(5 * 256), 2u);
+  // Local 6 * 8 KiB = 48 KiB per row index; global = local * 3.
+  EXPECT_EQ(m.rowOf(3 * 48 * 1024), 1u);
+  EXPECT_EQ(m.bankOf(3 * 48 * 1024), 0u);
+  EXPECT_EQ(m.bankOf(3 * 8 * 1024), 1u);
+  m.access(0, 0, 3 * 48 * 1024, false, Surface::Depth);
+  EXPECT_EQ(m.stats().row_misses, 3u * 6u);
+  for (unsigned ch = 0; ch < 3; ++ch) EXPECT_EQ(m.stats().channel_busy[ch], 48u * 1024u / 16u);
+}
+
+TEST(MemorySystem, InterleaveSpreadsAStreamEvenly) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  for (uint64_t i = 0; i < 256; ++i) m.access(i, i * 256, 256, false, Surface::BlendArrays);
+  // 64 KiB over 4 channels: 16 KiB each = 1024 cycles of bus at 16 B/cycle.
+  for (unsigned c = 0; c < 4; ++c) EXPECT_EQ(m.stats().channel_busy[c], 1024u) << "channel " << c;
+}
+
+TEST(MemorySystem, OneInterleaveChunkTouchesOneChannel) {
+  MemorySystem m(roundConfig(4), kRoundMhz);
+  m.access(0, 2 * 256, 256, false, Surface::Depth);
+  EXPECT_EQ(m.stats().channel_busy[0], 0u);
+  EXPECT_EQ(m.stats().channel_busy[1], 0u);
+  EXPECT_EQ(m.stats().channel_busy[2], 4 * kBurst);
+  EXPECT_EQ(m.stats().channel_busy[3], 0u);
+}
+
+TEST(MemorySystem, BytesBySurfaceAreExact) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  m.access(0, 0, 100, false, Surface::BlendArrays);
+  m.access(1, 30, 7, false, Surface::BlendArrays);
+  m.access(2, 4096, 2048, true, Surface::BlendArrays);
+  m.access(3, 1 << 20, 333, false, Surface::Depth);
+  m.access(4, 1 << 21, 64, true, Surface::Colour);
+  m.access(5, 1 << 22, 1000, true, Surface::Resolve);
+  m.access(6, 1 << 22, 1, false, Surface::Resolve);
+  const MemoryStats& s = m.stats();
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::BlendArrays)], 107u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::BlendArrays)], 2048u);
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::Depth)], 333u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Depth)], 0u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Colour)], 64u);
+  EXPECT_EQ(s.write_bytes[unsigned(Surface::Resolve)], 1000u);
+  EXPECT_EQ(s.read_bytes[unsigned(Surface::Resolve)], 1u);
+  EXPECT_EQ(s.readBytes(), 107u + 333u + 1u);
+  EXPECT_EQ(s.writeBytes(), 2048u + 64u + 1000u);
+  EXPECT_EQ(s.requests, 7u);
+}
+
+TEST(MemorySystem, ZeroBytesIsANoOp) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(77, 0, 0, false, Surface::Depth), 77u);
+  EXPECT_EQ(m.stats().requests, 0u);
+  EXPECT_EQ(m.stats().channel_busy[0], 0u);
+}
+
+TEST(MemorySystem, EarlierNowQueuesBehindTheBusWithoutGoingBackInTime) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  // 4 KiB from 0 spans both channels: 2 KiB each = 128 bus cycles.
+  const Cycle first = m.access(1000, 0, 4096, false, Surface::BlendArrays);
+  EXPECT_EQ(first, 1000 + kCtrl + kTrcd + kCl + 128);
+  // A request from another partition stamped earlier, same channel and row:
+  // its column command can issue once the row is open, but the data bus is
+  // booked until `first`: it queues behind, one burst later.
+  const Cycle late = m.access(0, 8192, 64, false, Surface::BlendArrays);  // channel 0, local 4096, bank 0 row 0
+  ASSERT_EQ(m.channelOf(8192), 0u);
+  EXPECT_EQ(late, first + kBurst);
+  EXPECT_EQ(m.stats().last_completion, late);
+  EXPECT_EQ(m.stats().row_hits, 64u - 2u + 1u);  // 62 hits in the stream, then this one
+}
+
+TEST(MemorySystem, EarlierNowOnAnIdleChannelIsNotDelayed) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  const Cycle first = m.access(1000, 0, 256, false, Surface::BlendArrays);  // channel 0 only
+  EXPECT_EQ(first, 1000 + kCtrl + kTrcd + kCl + 4 * kBurst);
+  EXPECT_EQ(m.access(0, 256, 64, false, Surface::BlendArrays), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.stats().last_completion, first);  // the maximum, not the latest call
+}
+
+TEST(MemorySystem, EarlierNowOnABusyBankDoesNotGoBackInTime) {
+  MemorySystem m(roundConfig(1), kRoundMhz);
+  const Cycle first = m.access(1000, 0, 64, false, Surface::Depth);  // bank 0 row 0
+  // Earlier request to bank 0 row 1: the precharge cannot start before row 0
+  // was opened and its transfer ended.
+  const Cycle late = m.access(0, 65536, 64, false, Surface::Depth);
+  EXPECT_EQ(late, first + kTrp + kTrcd + kCl + kBurst);
+}
+
+// A request of several bursts inside one interleave chunk that crosses a row
+// boundary (row_bytes < interleave_bytes): the chunk's bursts go to two banks.
+// Round config, 2 channels, 128 B rows: local [0, 256) of channel 0 is bank 0
+// (bursts at 0, 64) and bank 1 (128, 192).
+TEST(MemorySystem, ChunkCrossingARowSplitsOverBanks) {
+  DramConfig c = roundConfig(2);
+  c.row_bytes = 128;
+  MemorySystem m(c, kRoundMhz);
+  ASSERT_EQ(m.bankOf(64), 0u);
+  ASSERT_EQ(m.bankOf(128), 1u);
+  ASSERT_EQ(m.channelOf(192), 0u);
+  // Both banks activate at 40 + tRCD = 51; bank 0's bursts at 62 and 66, bank
+  // 1's wait for the bus: 70 and 74, done at 78.
+  EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 78u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().row_hits, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 16u);
+  EXPECT_EQ(m.stats().channel_busy[1], 0u);
+  // Bank 1 row 0 is open: a later hit to local 192 pays CL only.
+  EXPECT_EQ(m.access(1000, 192, 64, false, Surface::Depth), 1000 + kCtrl + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 3u);
+}
+
+// Coarsening (the time series reached stats.max_samples) gives the buckets a
+// system sampling at twice the interval from the start would have, also for
+// the bursts booked after it.
+TEST(MemorySystem, CoarsenedSamplesEqualSamplingAtTwiceTheInterval) {
+  MemorySystem fine(roundConfig(2), kRoundMhz), coarse(roundConfig(2), kRoundMhz);
+  fine.setSampleInterval(7);
+  coarse.setSampleInterval(14);
+  testutil::TestLcg rnd{99, 5};
+  Cycle now = 0;
+  for (int i = 0; i < 400; ++i) {
+    if (i == 150 || i == 300) fine.coarsenSamples();  // 7 -> 14 -> 28
+    if (i == 300) coarse.coarsenSamples();            // 14 -> 28
+    const uint64_t addr = rnd(1 << 16) * 64;
+    const uint32_t bytes = uint32_t(64 * (1 + rnd(8)));
+    const bool write = rnd(2) == 0;
+    EXPECT_EQ(fine.access(now, addr, bytes, write, Surface::BlendArrays),
+              coarse.access(now, addr, bytes, write, Surface::BlendArrays));
+    now += rnd(40);
+  }
+  EXPECT_EQ(fine.stats().bus_bytes_per_interval, coarse.stats().bus_bytes_per_interval);
+  uint64_t sum = 0;
+  for (uint64_t b : fine.stats().bus_bytes_per_interval) sum += b;
+  EXPECT_GE(sum, fine.stats().readBytes() + fine.stats().writeBytes());  // whole bursts
+  EXPECT_GT(fine.stats().bus_bytes_per_interval.size(), 10u);
+}
+
+// The bus bytes of a request are bucketed burst by burst by the cycle each
+// burst starts on the bus, also when one request's bursts straddle intervals.
+TEST(MemorySystem, BusBytesOfOneRequestStraddleIntervals) {
+  // Open row, 1 channel: bursts start at 62, 66, 70, 74.
+  {
+    MemorySystem m(roundConfig(1), kRoundMhz);
+    m.setSampleInterval(68);
+    m.access(0, 0, 256, false, Surface::Depth);
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, (std::vector<uint64_t>{128, 128}));
+  }
+  {
+    MemorySystem m(roundConfig(1), kRoundMhz);
+    m.setSampleInterval(7);  // buckets 8, 9, 10, 10
+    m.access(0, 0, 256, false, Surface::Depth);
+    std::vector<uint64_t> want(11, 0);
+    want[8] = 64;
+    want[9] = 64;
+    want[10] = 128;
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, want);
+  }
+  // Closed row: every burst re-activates after the previous one's data and
+  // precharge, 37 cycles apart: starts 62, 99, 136, 173, done at 177.
+  {
+    DramConfig c = roundConfig(1);
+    c.open_row = false;
+    MemorySystem m(c, kRoundMhz);
+    m.setSampleInterval(50);
+    EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 177u);
+    EXPECT_EQ(m.stats().bus_bytes_per_interval, (std::vector<uint64_t>{0, 128, 64, 64}));
+    EXPECT_EQ(m.stats().row_misses, 4u);
+    EXPECT_EQ(m.stats().row_hits, 0u);
+  }
+  // igpu timings are fractional: starts 77.625, 83.375, 89.125, 94.875 are in
+  // cycles 77, 83, 89, 94.
+  {
+    MemorySystem m(DramConfig{}, 1150.0);
+    m.setSampleInterval(1);
+    EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 101u);  // ceil(94.875 + 5.75)
+    const auto& bus = m.stats().bus_bytes_per_interval;
+    ASSERT_EQ(bus.size(), 95u);
+    for (size_t i = 0; i < bus.size(); ++i)
+      EXPECT_EQ(bus[i], (i == 77 || i == 83 || i == 89 || i == 94) ? 64u : 0u) << i;
+  }
+}
+
+// Reference: the per-burst booking of MEMORY.md written out directly (address
+// mapping by its formulas, one burst at a time), on the ticks the model uses.
+class ReferenceDram {
+ public:
+  ReferenceDram(const DramConfig& c, const MemorySystem& m)
+      : c_(c),
+        ctrl_(ticks(m.controllerCycles())),
+        cl_(ticks(m.clCycles())),
+        trcd_(ticks(m.trcdCycles())),
+        trp_(ticks(m.trpCycles())),
+        tras_(ticks(m.trasCycles())),
+        burst_(ticks(m.burstCycles())),
+        bus_(c.channels, 0),
+        busy_(c.channels, 0),
+        banks_(size_t(c.channels) * c.banks) {
+    stats_.channel_busy.assign(c.channels, 0);
+  }
+  void setSampleInterval(Cycle i) { interval_ = i; }
+  const MemoryStats& stats() const { return stats_; }
+
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) {
+    if (bytes == 0) return now;
+    (write ? stats_.write_bytes : stats_.read_bytes)[unsigned(s)] += bytes;
+    ++stats_.requests;
+    const uint64_t arrive = (now << 16) + ctrl_;
+    uint64_t done = arrive;
+    const uint64_t B = c_.burst_bytes, I = c_.interleave_bytes, C = c_.channels, R = c_.row_bytes, K = c_.banks;
+    for (uint64_t a = addr / B * B; a < addr + bytes; a += B) {
+      const uint64_t ch = (a / I) % C;
+      const uint64_t local = a / (I * C) * I + a % I;
+      uint64_t bank_index = (local / R) % K;
+      const uint64_t row = local / (R * K);
+      if (c_.bank_hash) {
+        // MEMORY.md: XOR of the row's bank-sized bit groups (K a power of two),
+        // else the sum of its base-K digits, mod K.
+        const bool pow2 = (K & (K - 1)) == 0;
+        for (uint64_t r = row; r != 0; r /= K) bank_index = pow2 ? (bank_index ^ (r % K)) : bank_index + r % K;
+        bank_index %= K;
+      }
+      Bank& k = banks_[ch * K + bank_index];
+      uint64_t col;
+      if (c_.open_row) {
+        if (k.open && k.row == row) {
+          ++stats_.row_hits;
+          col = std::max(arrive, k.row_ready);
+        } else {
+          ++stats_.row_misses;
+          uint64_t pre = std::max({arrive, k.row_ready, k.last_end});
+          if (k.open) pre = std::max(pre, k.act + tras_) + trp_;  // tRAS, then precharge
+          k.act = pre;
+          k.row_ready = pre + trcd_;
+          k.open = true;
+          k.row = row;
+          col = k.row_ready;
+        }
+      } else {
+        ++stats_.row_misses;
+        k.act = std::max(arrive, k.act_ready);
+        col = k.act + trcd_;
+      }
+      const uint64_t start = std::max(col + cl_, bus_[ch]);
+      const uint64_t end = start + burst_;
+      bus_[ch] = end;
+      k.last_end = std::max(k.last_end, end);
+      if (!c_.open_row) k.act_ready = std::max(k.last_end, k.act + tras_) + trp_;
+      if (interval_) {
+        const uint64_t bucket = (start >> 16) / interval_;
+        if (bucket >= stats_.bus_bytes_per_interval.size()) stats_.bus_bytes_per_interval.resize(bucket + 1, 0);
+        stats_.bus_bytes_per_interval[bucket] += B;
+      }
+      busy_[ch] += burst_;
+      stats_.channel_busy[ch] = (busy_[ch] + 0xffff) >> 16;
+      done = std::max(done, end);
+    }
+    const Cycle completion = (done + 0xffff) >> 16;
+    stats_.last_completion = std::max(stats_.last_completion, completion);
+    return completion;
+  }
+
+ private:
+  static uint64_t ticks(double cycles) { return uint64_t(std::llround(std::ldexp(cycles, 16))); }
+  struct Bank {
+    bool open = false;
+    uint64_t row = 0, row_ready = 0, last_end = 0, act_ready = 0, act = 0;
+  };
+  DramConfig c_;
+  uint64_t ctrl_, cl_, trcd_, trp_, tras_, burst_;
+  std::vector<uint64_t> bus_, busy_;
+  std::vector<Bank> banks_;
+  MemoryStats stats_;
+  Cycle interval_ = 0;
+};
+
+void expectSameStats(const MemoryStats& got, const MemoryStats& want, const std::string& what) {
+  EXPECT_EQ(got.read_bytes, want.read_bytes) << what;
+  EXPECT_EQ(got.write_bytes, want.write_bytes) << what;
+  EXPECT_EQ(got.requests, want.requests) << what;
+  EXPECT_EQ(got.row_hits, want.row_hits) << what;
+  EXPECT_EQ(got.row_misses, want.row_misses) << what;
+  EXPECT_EQ(got.channel_busy, want.channel_busy) << what;
+  EXPECT_EQ(got.last_completion, want.last_completion) << what;
+  EXPECT_EQ(got.bus_bytes_per_interval, want.bus_bytes_per_interval) << what;
+}
+
+struct Geometry {
+  unsigned channels, banks, row_bytes, burst_bytes, interleave_bytes;
+};
+
+// Seeded random request streams (unaligned starts, 1 B .. 8 KiB, reads and
+// writes, callers slightly out of time order) on regular and odd geometries,
+// both row policies and several sample intervals: every completion and every
+// stats field equals the burst-by-burst reference.
+TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
+  const Geometry geometries[] = {
+      {1, 8, 8192, 64, 256},   // igpu-like, 1 channel
+      {2, 8, 8192, 64, 256},   // igpu
+      {4, 16, 4096, 64, 256},  // dgpu
+      {3, 6, 8192, 64, 256},   // non-power-of-two channels and banks
+      {2, 5, 320, 64, 192},    // rows of 5 bursts, chunks of 3: chunks cross rows
+      {3, 3, 128, 64, 256},    // rows shorter than a chunk
+      {4, 7, 96, 32, 96},      // row = chunk, odd everything
+      {1, 3, 192, 64, 128},    // one channel, rows not a multiple of the chunk
+      {2, 2, 64, 64, 64},      // one burst per row and per chunk
+  };
+  struct Timing {
+    double mhz, gbps, tck, ctrl;
+  };
+  const Timing timings[] = {{1000.0, 16.0, 1.0, 40.0}, {1150.0, 12.8, 1.25, 40.0}, {1600.0, 56.0, 0.667, 100.0}};
+  testutil::TestLcg rnd{0x9e3779b97f4a7c15ull, 17};
+  int cases = 0;
+  for (const Geometry& g : geometries) {
+    for (bool open : {true, false}) {
+      for (bool hash : {false, true}) {
+        for (Cycle interval : {Cycle(0), Cycle(1), Cycle(7), Cycle(10000)}) {
+          const Timing& t = timings[cases % 3];
+          DramConfig c;
+          c.channels = g.channels;
+          c.banks = g.banks;
+          c.row_bytes = g.row_bytes;
+          c.burst_bytes = g.burst_bytes;
+          c.interleave_bytes = g.interleave_bytes;
+          c.open_row = open;
+          c.bank_hash = hash;
+          c.channel_gbps = t.gbps;
+          c.tck_ns = t.tck;
+          c.controller_ns = t.ctrl;
+          c.cl = 11 + unsigned(cases % 5);
+          c.trcd = 11;
+          c.trp = 9 + unsigned(cases % 7);
+          MemorySystem m(c, t.mhz);
+          ReferenceDram ref(c, m);
+          m.setSampleInterval(interval);
+          ref.setSampleInterval(interval);
+          const std::string what = std::to_string(g.channels) + " ch " + std::to_string(g.banks) + " banks row " +
+                                   std::to_string(g.row_bytes) + " il " + std::to_string(g.interleave_bytes) +
+                                   (open ? " open" : " closed") + (hash ? " hashed" : "") + " interval " +
+                                   std::to_string(interval);
+          // A small address range (many row hits and conflicts) or a large one.
+          const uint64_t range = (cases % 2) ? (uint64_t(1) << 20) : (uint64_t(1) << 34);
+          Cycle now = 0;
+          uint64_t addr = 0;
+          uint32_t bytes = 1;
+          for (int i = 0; i < 3000; ++i) {
+            const uint64_t kind = rnd(12);
+            // 10: streaming on from the previous request, 11: the same address again.
+            if (kind == 10)
+              addr += bytes;
+            else if (kind == 9)
+              addr = rnd(range) / 2048 * 2048;
+            else if (kind != 11)
+              addr = rnd(range);
+            if (kind < 3)
+              bytes = uint32_t(1 + rnd(64));
+            else if (kind < 6)
+              bytes = uint32_t(1 + rnd(8192));
+            else
+              bytes = uint32_t(64) << rnd(6);  // 64 B .. 2 KiB
+            // Mostly forward in time, bursty, sometimes a caller up to a quantum behind.
+            const Cycle at = rnd(8) == 0 ? now - std::min<Cycle>(now, rnd(1000)) : now;
+            now += rnd(4) == 0 ? rnd(400) : 0;
+            const bool write = rnd(2) == 1;
+            const Surface s = Surface(rnd(kSurfaceCount));
+            const Cycle want = ref.access(at, addr, bytes, write, s);
+            ASSERT_EQ(m.access(at, addr, bytes, write, s), want) << what << ", request " << i;
+          }
+          expectSameStats(m.stats(), ref.stats(), what);
+          // A change of interval on the way keeps the series consistent too.
+          if (interval) {
+            m.setSampleInterval(interval * 3);
+            ref.setSampleInterval(interval * 3);
+            for (int i = 0; i < 200; ++i) {
+              addr = rnd(range);
+              bytes = uint32_t(1 + rnd(4096));
+              EXPECT_EQ(m.access(now + Cycle(i), addr, bytes, false, Surface::Colour),
+                        ref.access(now + Cycle(i), addr, bytes, false, Surface::Colour))
+                  << what;
+            }
+            expectSameStats(m.stats(), ref.stats(), what + " (interval changed)");
+          }
+          EXPECT_GT(m.stats().row_misses, 0u) << what;
+          if (open) {
+            EXPECT_GT(m.stats().row_hits, 0u) << what;
+          }
+          ++cases;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(cases, 9 * 2 * 2 * 4);
+}
+
+// ---- Refresh (dram.trefi_ns / trfc_ns) on the round configuration ----
+// One channel, tREFI 1000 cycles, tRFC 100: windows [1000, 1100), [2000, 2100) ...
+DramConfig refreshConfig(unsigned channels) {
+  DramConfig c = roundConfig(channels);
+  c.trefi_ns = 1000;
+  c.trfc_ns = 100;
+  return c;
+}
+
+TEST(MemorySystem, RefreshIsOffByDefaultAndLeavesEarlierTimes) {
+  EXPECT_EQ(DramConfig{}.trefi_ns, 0.0);
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  // Before the first window nothing changes: closed bank, then a row hit.
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), kCtrl + kTrcd + kCl + kBurst);   // 66
+  EXPECT_EQ(m.access(900, 64, 64, false, Surface::Depth), 900 + kCtrl + kCl + kBurst);  // 955, ends before 1000
+  EXPECT_EQ(m.stats().row_hits, 1u);
+}
+
+TEST(MemorySystem, ARunMeetingARefreshWaitsForItsEndOnAClosedRow) {
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), 66u);  // row 0 of bank 0 open
+  // A row hit at 950 would put its data on the bus at 1001-1005, inside the
+  // window [1000, 1100): it waits for the window's end, and the refresh closed
+  // the row: activate at 1100, data at 1100 + tRCD + CL, done 4 cycles later.
+  EXPECT_EQ(m.access(950, 64, 64, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
+  EXPECT_EQ(m.stats().row_hits, 0u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);  // the window is not busy time
+}
+
+TEST(MemorySystem, ARefreshBetweenTwoAccessesClosesTheRowWithoutAPrecharge) {
+  MemorySystem m(refreshConfig(1), kRoundMhz);
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::Depth), 66u);
+  // After the window: the row is closed (a miss), but the refresh precharged
+  // the bank: tRCD + CL, no tRP.
+  EXPECT_EQ(m.access(1200, 64, 64, false, Surface::Depth), 1200 + kCtrl + kTrcd + kCl + kBurst);
+  // Opened after the window: the next access hits.
+  EXPECT_EQ(m.access(1300, 128, 64, false, Surface::Depth), 1300 + kCtrl + kCl + kBurst);
+  EXPECT_EQ(m.stats().row_hits, 1u);
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  // A request arriving inside a window waits for its end.
+  EXPECT_EQ(m.access(1950, 192, 64, false, Surface::Depth), 2100 + kTrcd + kCl + kBurst);
+}
+
+TEST(MemorySystem, RefreshWindowsAreStaggeredOverChannels) {
+  // Two channels: channel 0 refreshes at 1000, 2000 ..., channel 1 at 1500, 2500 ...
+  MemorySystem m(refreshConfig(2), kRoundMhz);
+  ASSERT_EQ(m.channelOf(0), 0u);
+  ASSERT_EQ(m.channelOf(256), 1u);
+  // At 1450 on channel 0: activate 1490, data 1512-1516, between its windows.
+  EXPECT_EQ(m.access(1450, 0, 64, false, Surface::Depth), 1450 + kCtrl + kTrcd + kCl + kBurst);
+  // The same on channel 1 meets its window [1500, 1600).
+  EXPECT_EQ(m.access(1450, 256, 64, false, Surface::Depth), 1600 + kTrcd + kCl + kBurst);
+}
+
+// A stream of B bytes takes at least B / bandwidth / (1 - tRFC / tREFI), and
+// at most that with every window also costing a re-activation and one burst.
+TEST(MemorySystem, RefreshTakesItsShareOfTheBandwidth) {
+  constexpr uint64_t kBursts = 4096;
+  const auto streamEnd = [&](const DramConfig& c) {
+    MemorySystem m(c, kRoundMhz);
+    Cycle done = 0;
+    for (uint64_t i = 0; i < kBursts; ++i) done = std::max(done, m.access(0, i * 64, 64, false, Surface::BlendArrays));
+    EXPECT_EQ(m.stats().channel_busy[0], kBursts * kBurst);
+    return done;
+  };
+  const double busy = double(kBursts * kBurst);  // 16,384 cycles of data
+  const Cycle plain = streamEnd(roundConfig(1));
+  EXPECT_LE(plain, Cycle(busy) + kCtrl + kTrcd + kCl + 64);
+  const Cycle refreshed = streamEnd(refreshConfig(1));
+  const double period = 1000, rfc = 100, per_window = rfc + kTrcd + kCl + kBurst;
+  EXPECT_GE(double(refreshed), busy * period / (period - rfc));                  // >= 18,204
+  EXPECT_LE(double(refreshed), busy * period / (period - per_window) + period);  // <= 19,746
+}
+
+// Closed rows: every burst activates its own row, so with refresh a request's
+// bursts are placed one by one and a window falls between two of them.
+TEST(MemorySystem, ClosedRowBurstsOfOneRequestStraddleARefresh) {
+  DramConfig c = refreshConfig(1);
+  c.open_row = false;
+  DramConfig plain = c;
+  plain.trefi_ns = plain.trfc_ns = 0;
+  // Two bursts at 930: the first activates at 970 and ends at 996; the second
+  // could activate at 996 + tRP = 1007, inside [1000, 1100): it activates at 1100.
+  MemorySystem m(c, kRoundMhz), p(plain, kRoundMhz);
+  EXPECT_EQ(p.access(930, 0, 128, false, Surface::Depth), 1007 + kTrcd + kCl + kBurst);  // 1033 without refresh
+  EXPECT_EQ(m.access(930, 0, 128, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
+  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);
+}
+
+TEST(MemorySystem, RefusesRefreshGapsShorterThanARow) {
+  EXPECT_EQ(MemorySystem::refreshProblem(refreshConfig(1), kRoundMhz), "");
+  // The longest run booked as one must fit in tREFI - tRFC. Open rows: a row of
+  // 128 bursts on a closed bank, tRCD + CL + 512 = 534 cycles; closed rows place
+  // one burst at a time: tRCD + CL + 4 = 26.
+  struct Case {
+    bool open_row;
+    unsigned run;
+    const char* what;
+  };
+  for (const Case& k : {Case{true, 534, "a row of 8192 bytes on a closed bank"}, Case{false, 26, "one burst"}}) {
+    DramConfig c = refreshConfig(1);
+    c.open_row = k.open_row;
+    c.trfc_ns = 1000 - k.run;
+    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "") << k.what;
+    c.trfc_ns = 1000 - k.run + 1;
+    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
+              fmt::format("dram.trefi_ns (1000 ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer "
+                          "booked as one, {} ({}.0 ns here)",
+                          1000 - k.run + 1, k.what, k.run));
+    EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  }
+  DramConfig c = refreshConfig(1);
+  c.trfc_ns = 0;
+  EXPECT_NE(MemorySystem::refreshProblem(c, kRoundMhz).find("needs dram.trfc_ns > 0"), std::string::npos);
+  c.trefi_ns = 0;  // no refresh: tRFC is not used
+  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
+}
+
+TEST(MemorySystem, RejectsInvalidGeometry) {
+  DramConfig c = roundConfig(1);
+  c.interleave_bytes = 96;  // not a multiple of the burst
+  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  c = roundConfig(1);
+  c.channels = 0;
+  EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
+  c = roundConfig(1);
+  EXPECT_THROW(MemorySystem(c, 0.0), std::invalid_argument);
+}
+
+TEST(MemorySystem, Deterministic) {
+  auto run = [] {
+    MemorySystem m(DramConfig{}, 1150.0);
+    uint64_t x = 12345, sum = 0;
+    for (int i = 0; i < 20000; ++i) {
+      x = x * 6364136223846793005ull + 1442695040888963407ull;
+      const uint64_t addr = (x >> 20) % (64u << 20);
+      const uint32_t bytes = uint32_t(1 + (x >> 50) % 4096);
+      sum = sum * 31 + m.access(uint64_t(i) * 3, addr, bytes, (x >> 7) & 1, Surface((x >> 9) & 3));
+    }
+    return std::pair{sum, m.stats().row_hits};
+  };
+  EXPECT_EQ(run(), run());
+}
+
+// Two callers (partitions a quantum apart) book a saturating stream out of
+// time order; the per-interval bus bytes, bucketed by bus time, never exceed
+// what the channels can move in an interval (plus one burst per channel that
+// starts just before the boundary), and they add up to every burst moved.
+TEST(MemorySystem, BusBytesPerIntervalNeverExceedBandwidth) {
+  MemorySystem m(roundConfig(2), kRoundMhz);
+  constexpr Cycle kInterval = 100;
+  m.setSampleInterval(kInterval);
+  // B streams one bank ahead of A (local address 8 KiB on), so both mostly hit open rows.
+  uint64_t addr_a = 0, addr_b = 16384;
+  for (int i = 0; i < 2000; ++i) {
+    m.access(Cycle(i) * 2 + 500, addr_a, 256, false, Surface::BlendArrays);  // caller A, ahead
+    m.access(Cycle(i) * 2, addr_b, 256, true, Surface::BlendArrays);         // caller B, behind
+    addr_a += 256;
+    addr_b += 256;
+  }
+  const auto& bus = m.stats().bus_bytes_per_interval;
+  ASSERT_FALSE(bus.empty());
+  uint64_t total = 0;
+  for (uint64_t b : bus) {
+    EXPECT_LE(b, uint64_t(32.0 * kInterval) + 2 * 64);  // 2 channels x 16 B/cycle
+    total += b;
+  }
+  EXPECT_EQ(total, 2u * 2000u * 256u);
+  // The stream saturates the buses: the busiest interval is at least 90% full.
+  EXPECT_GE(*std::max_element(bus.begin(), bus.end()), uint64_t(0.9 * 32.0 * kInterval));
+}
+
+}  // namespace
+}  // namespace oit::rop
