@@ -14,11 +14,11 @@
 #include <unistd.h>
 
 #include "apps/Commands.hpp"
+#include "reports/SweepMerge.hpp"
 
 namespace oit::cli {
 
 // Defined in cmd_sweep.cpp.
-int collectSweep(const std::string& dir, bool quiet);
 std::string selfExecutable();
 
 namespace {
@@ -67,7 +67,10 @@ void runReport(const ReportArgs& a) {
   const std::string out = a.out.empty() ? (dir / "report.html").string() : fs::absolute(a.out).string();
   checkWritable(out, !a.out.empty());
   if (fs::exists(dir / "plan.json")) {
-    collectSweep(dir.string(), true);  // failed points are listed in the page, not an error here
+    // Failed and missing points are listed here and in the page, not an error.
+    const sweep::MergeSummary sum = sweep::mergeSweep(dir);
+    if (!a.quiet) fmt::print("{}", sweep::mergeSummaryText(sum));
+    std::fflush(stdout);
   } else if (!fs::exists(dir / "results.json")) {
     throw std::invalid_argument("report: " + dir.string() + " has neither plan.json nor results.json (run `oitsim sweep` first)");
   }

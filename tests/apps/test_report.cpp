@@ -74,7 +74,9 @@ TEST_F(Report, GeneratorIoErrorIsOneLineAndTheRealExitCode) {
                           "/reports/make_report.py failed (exit code 1); " + sw + "/report.html was not written\n"),
             std::string::npos)
       << r.output;
-  EXPECT_EQ(lines(r.output).size(), 2u) << r.output;
+  // The merge's summary line, then the script's error and oitsim's.
+  EXPECT_EQ(lines(r.output).size(), 3u) << r.output;
+  EXPECT_EQ(r.output.rfind("sweep: 2 points, 2 ok, 0 failed; results ", 0), 0u) << r.output;
   EXPECT_FALSE(fs::exists(sw + "/report.html"));
   EXPECT_FALSE(fs::exists(sw + "/report.html.tmp"));
 }

@@ -233,18 +233,27 @@ TEST(SweepErrors, RerunIntoTheSameFolderNeverShowsTheOldReport) {
   EXPECT_EQ(res["points"][0]["status"], "failed");
   EXPECT_EQ(res["summary"]["failed"], 1);
 
-  // Once the new plan is written nothing of the earlier sweep is left, even if
-  // the new one is stopped before its points run (--emit slurm runs none): the
-  // old tables went (they showed the earlier numbers as current after an
-  // interrupted re-sweep) and so did every point folder of the plan.
+  // Once the new plan is written nothing of the earlier sweep is left that is
+  // not this plan's own result, even if the new one is stopped before its
+  // points run (--emit slurm runs none): the old tables go (they showed the
+  // earlier numbers as current after an interrupted re-sweep); a finished point
+  // of the same command on the same trace is kept (a resumed sweep), every
+  // other point folder of the plan is emptied, and --force empties them all.
   CliResult c = sweepInto("a.json", "-q");
   ASSERT_EQ(c.exit_code, 0) << c.output;
   ASSERT_TRUE(fs::exists(d.file("o") + "/results.json"));
   CliResult e = sweepInto("a.json", "--emit slurm");
   ASSERT_EQ(e.exit_code, 0) << e.output;
+  EXPECT_NE(e.output.find("every one of the 1 points has finished: no Slurm job written"), std::string::npos)
+      << e.output;
   EXPECT_FALSE(fs::exists(d.file("o") + "/results.json"));
   EXPECT_FALSE(fs::exists(d.file("o") + "/results.csv"));
+  EXPECT_FALSE(fs::exists(d.file("o") + "/sweep.slurm"));
+  EXPECT_TRUE(fs::exists(d.file("o") + "/points/0000-t-mlab/report.json"));
+  CliResult f = sweepInto("a.json", "--emit slurm --force");
+  ASSERT_EQ(f.exit_code, 0) << f.output;
   EXPECT_FALSE(fs::exists(d.file("o") + "/points/0000-t-mlab"));
+  EXPECT_NE(readText(d.file("o") + "/sweep.slurm").find("#SBATCH --array=0-0"), std::string::npos);
 }
 
 TEST(SweepErrors, SpecErrorsNameTheFileAndKey) {
