@@ -16,28 +16,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Each test's own folder, with a small hair trace (hair: thin overlapping
+// strands, where the approximate algorithms differ from the reference).
 class CliRunFlip : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir("cli_run_flip");
-    trace_ = dir_->file("h.oitt");
-    CliResult r = runOitsim("gen hair --width 96 --height 54 -o " + trace_);
+  void SetUp() override {
+    CliResult r = runOitsim("gen hair -q --width 96 --height 54 -o " + trace_);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
-  static TempDir* dir_;
-  static std::string trace_;
+  TempDir dir_{std::string("cli_run_flip_") + ::testing::UnitTest::GetInstance()->current_test_info()->name()};
+  const std::string trace_ = dir_.file("h.oitt");
 };
-TempDir* CliRunFlip::dir_ = nullptr;
-std::string CliRunFlip::trace_;
 
 // The report's FLIP is the metric of the two images the run wrote (image.png
 // against the reference's sRGB codes), at the default 67.02 pixels per degree.
 TEST_F(CliRunFlip, ReportAndFlipPngHoldTheFlipOfTheWrittenImages) {
-  const std::string out = dir_->file("wboit");
+  const std::string out = dir_.file("wboit");
   CliResult r = runOitsim("run --mode functional --algo wboit --trace " + trace_ + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("algorithm   wboit (format fp32, weight eq. 10), mode functional"), std::string::npos)
@@ -70,7 +64,7 @@ TEST_F(CliRunFlip, ReportAndFlipPngHoldTheFlipOfTheWrittenImages) {
 }
 
 TEST_F(CliRunFlip, PpdChangesTheErrorAndIsRecorded) {
-  const std::string a = dir_->file("ppd67"), b = dir_->file("ppd20");
+  const std::string a = dir_.file("ppd67"), b = dir_.file("ppd20");
   ASSERT_EQ(runOitsim("run -q --mode functional --algo mlab --layers 1 --trace " + trace_ + " --out " + a).exit_code, 0);
   ASSERT_EQ(runOitsim("run -q --mode functional --algo mlab --layers 1 --ppd 20 --trace " + trace_ + " --out " + b)
                 .exit_code,
@@ -85,7 +79,7 @@ TEST_F(CliRunFlip, PpdChangesTheErrorAndIsRecorded) {
 
 TEST_F(CliRunFlip, BadPpdIsOneErrorAndWritesNothing) {
   for (const char* bad : {"0", "-3", "nan", "20000"}) {
-    const std::string out = dir_->file(std::string("bad") + bad);
+    const std::string out = dir_.file(std::string("bad") + bad);
     CliResult r = runOitsim("run -q --mode functional --ppd " + std::string(bad) + " --trace " + trace_ + " --out " + out);
     EXPECT_EQ(r.exit_code, 1) << bad << r.output;
     EXPECT_EQ(lines(r.output).size(), 1u) << r.output;
@@ -99,14 +93,14 @@ TEST_F(CliRunFlip, BadPpdIsOneErrorAndWritesNothing) {
 // names none (it said "abuffer (k=4, format fp32)").
 TEST_F(CliRunFlip, SummaryShowsOnlyTheSettingsTheAlgorithmUses) {
   CliResult r = runOitsim("run --mode functional --algo abuffer --layers 2 --trace " + trace_ + " --out " +
-                          dir_->file("abuffer"));
+                          dir_.file("abuffer"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("algorithm   abuffer, mode functional, 1 pass(es)"), std::string::npos) << r.output;
-  const nlohmann::json j = readJson(dir_->file("abuffer") + "/report.json");
+  const nlohmann::json j = readJson(dir_.file("abuffer") + "/report.json");
   EXPECT_EQ(j["config"]["ignored_settings"],
             nlohmann::json({"layers", "format", "bits", "samples", "weight", "seed"}));
   EXPECT_EQ(j["image"]["metrics"]["flip"]["mean"].get<double>(), 0.0);
-  r = runOitsim("run --mode functional --algo mlab --layers 2 --trace " + trace_ + " --out " + dir_->file("mlab"));
+  r = runOitsim("run --mode functional --algo mlab --layers 2 --trace " + trace_ + " --out " + dir_.file("mlab"));
   EXPECT_NE(r.output.find("algorithm   mlab (k=2, format fp32), mode functional"), std::string::npos) << r.output;
 }
 

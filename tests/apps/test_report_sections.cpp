@@ -14,7 +14,7 @@ namespace {
 std::string python(const std::string& code) {
   TempDir d("report_sections");
   writeText(d.file("t.py"), "import sys\nsys.path.insert(0, '" + std::string(OITSIM_SOURCE_DIR) +
-                                "/reports')\nfrom htmlreport import data, bottleneck, tables\n" + code);
+                                "/reports')\nfrom htmlreport import data\n" + code);
   const CliResult r = runShell("/usr/bin/python3 " + d.file("t.py"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   return r.output;
@@ -68,6 +68,7 @@ m = {"timing.clock_mhz": 500.0, "timing.cycles": 6000, "timing.partition_cycles"
 print(data.phases_us(m))
 print(data.bound_by(m))
 print(data.level_hit_rate(m, "l2"))
+from htmlreport import bottleneck
 p = {"id": "0000-t-mlab", "trace": "t", "axes": {}, "metrics": m, "status": "ok"}
 html = bottleneck.bottleneck_table([p], data.Configs([p]))
 for s in ["bound by (share of frame)", "L2 hit rate", "traffic / compulsory", "dram_bus 72.0 %", "62.5 %", "3.50 x"]:
