@@ -184,6 +184,11 @@ TEST(ReportSpeedModes, GroupsByEveryRopParameterAndErrorsAreSigned) {
     EXPECT_NEAR(row["cycle_err_pct"].get<double>(), want, 1e-9) << cfg << " " << row["mode"];
   }
   EXPECT_EQ(sp["modes"]["timing q=200 skip=on"]["groups"].get<int>(), 2);
+  // A numeric sweep axis gets its own line plot (cache.ways: 2, 8); the speed
+  // axis's labels are not numbers.
+  const std::string page = readText(dir.file("sw/report.html"));
+  EXPECT_NE(page.find("alt=\"glass: against cache.ways\""), std::string::npos);
+  EXPECT_EQ(page.find("against speed"), std::string::npos);
 }
 
 // The signed error of a speed mode, on a hand-made results set (a real sweep's
