@@ -11,7 +11,6 @@
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
-#include <mutex>
 #include <spawn.h>
 #include <sstream>
 #include <sys/wait.h>
