@@ -17,6 +17,8 @@
 #include "apps/OutputFiles.hpp"
 #include "apps/TraceOptions.hpp"
 #include "apps/Progress.hpp"
+#include "model/AlgorithmSettings.hpp"
+#include "model/Flip.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
@@ -40,6 +42,7 @@ struct RunArgs {
   bool width_given = false, height_given = false;
   bool vcd_given = false;  // --vcd on the command line (an empty path is an error, not "no VCD")
   AlgorithmParams params;
+  double ppd = model::kFlipDefaultPpd;  // FLIP's pixels per degree
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   bool quiet = false;
   std::string command_line;  // recorded in the report
@@ -71,6 +74,32 @@ TimedRender renderWith(FragmentSource& src, model::OitAlgorithm& algo, const mod
 nlohmann::json metricsJson(const model::ImageMetrics& m) {
   return {{"rmse", m.rmse},         {"psnr", m.psnr},         {"ssim", m.ssim},
           {"mean_abs", m.mean_abs}, {"max_abs", m.max_abs}, {"pixels_over_1_255", m.pixels_over_1_255}};
+}
+
+// image.metrics.flip: LDR-FLIP's pooled values and the viewing condition.
+nlohmann::json flipJson(const model::FlipMap& f, double ppd) {
+  return {{"mean", f.stats.mean},
+          {"weighted_median", f.stats.weighted_median},
+          {"weighted_q1", f.stats.weighted_q1},
+          {"weighted_q3", f.stats.weighted_q3},
+          {"max", f.stats.max},
+          {"ppd", ppd}};
+}
+
+// "mlab (k=4, format fp32)": only the settings the algorithm uses
+// (model/AlgorithmSettings.hpp); "abuffer" alone.
+std::string algorithmWithSettings(const std::string& algo, const AlgorithmParams& p) {
+  const model::AlgorithmSettings u = model::algorithmSettings(algo);
+  std::vector<std::string> parts;
+  if (u.layers) parts.push_back(fmt::format("k={}", p.layers));
+  if (u.format) parts.push_back(fmt::format("format {}", model::toString(p.format)));
+  if (u.bits) parts.push_back(fmt::format("bits {}", p.bits));
+  if (u.samples) parts.push_back(fmt::format("samples {}", p.samples));
+  if (u.weight) parts.push_back(fmt::format("weight eq. {}", p.weight));
+  if (u.seed) parts.push_back(fmt::format("seed {}", p.seed));
+  std::string s;
+  for (const auto& part : parts) s += (s.empty() ? "" : ", ") + part;
+  return s.empty() ? algo : algo + " (" + s + ")";
 }
 
 uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
@@ -127,6 +156,8 @@ void checkOptions(const RunArgs& a) {
   for (float c : a.background)
     if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("--background: each channel must be in [0,1]");
   checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
+  if (!(a.ppd > 0.0 && a.ppd <= 10000.0))
+    throw std::invalid_argument(fmt::format("--ppd: expected pixels per degree in (0, 10000], got {}", a.ppd));
   if (a.vcd_given && a.vcd.empty()) throw std::invalid_argument("--vcd: expected a file name, got an empty path");
   checkOutputFolder("--out", a.out);
   if (!a.vcd.empty() && a.mode != "timing")
@@ -135,7 +166,7 @@ void checkOptions(const RunArgs& a) {
 }
 
 // The files a run writes into --out, the report last.
-constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"};
+constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "report.json"};
 
 // Output files are staged under temporary names and renamed together at the
 // end; a run that fails or is interrupted leaves none of them behind.
@@ -242,6 +273,8 @@ void runReplay(RunArgs& a) {
     ref = renderWith(*src, *reference, clear, !a.quiet, "reference");
   }
   const model::ImageMetrics m = model::compareImages(run.result.image, ref.result.image);
+  const model::FlipMap flip =
+      model::ldrFlip(model::toSrgb8Image(ref.result.image), model::toSrgb8Image(run.result.image), a.ppd);
   const model::RenderCounts& c = run.result.counts;
   if (!c.balanced())
     throw std::logic_error(fmt::format("fragment outcomes do not sum to fragments in ({} != {} + {} + {} + {} + {})",
@@ -263,7 +296,8 @@ void runReplay(RunArgs& a) {
                  {"samples", a.params.samples},
                  {"weight", a.params.weight},
                  {"seed", a.params.seed},
-                 {"background", a.background}};
+                 {"background", a.background},
+                 {"ignored_settings", model::ignoredSettings(a.algo)}};
   nlohmann::json passes = nlohmann::json::array();
   for (unsigned p = 0; p < c.pass_outcomes.size(); ++p)
     passes.push_back({{"name", std::string(algo->passName(p))},
@@ -282,9 +316,11 @@ void runReplay(RunArgs& a) {
                  {{"image_png", "image.png"},
                   {"image_pfm", "image.pfm"},
                   {"reference_pfm", "reference.pfm"},
-                  {"diff_png", "diff.png"}}},
+                  {"diff_png", "diff.png"},
+                  {"flip_png", "flip.png"}}},
                 {"reference", "abuffer"},
                 {"metrics", metricsJson(m)}};
+  j["image"]["metrics"]["flip"] = flipJson(flip, a.ppd);
   j["sim"] = {{"wall_seconds", run.wall_seconds},
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
@@ -312,6 +348,7 @@ void runReplay(RunArgs& a) {
   model::writePfm(run.result.image, staged.stage(out / "image.pfm"));
   model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
   model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
+  model::writeFlipPng(flip, staged.stage(out / "flip.png"));
   reports::writeJsonReport(staged.stage(out / "report.json"), j);
   staged.commit();
   vcd.keep();
@@ -319,9 +356,8 @@ void runReplay(RunArgs& a) {
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
              c.fragments_in, c.opaque, h.draws.size());
-  fmt::print("algorithm   {} (k={}, format {}), mode {}{}, {} pass(es) over the trace\n", a.algo, a.params.layers,
-             model::toString(a.params.format), a.mode, timing ? ", preset " + tree.config().preset : "",
-             c.source_passes);
+  fmt::print("algorithm   {}, mode {}{}, {} pass(es) over the trace\n", algorithmWithSettings(a.algo, a.params), a.mode,
+             timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
   fmt::print("memory      {} B/pixel, {} of per-pixel state, {} read, {} written\n", algo->bytesPerPixel(),
@@ -330,6 +366,8 @@ void runReplay(RunArgs& a) {
   if (timing) printTimingSummary(j);
   fmt::print("image       vs abuffer: RMSE {:.6f}, PSNR {:.2f} dB, SSIM {:.5f}, max |err| {:.5f}, {} px > 1/255\n",
              m.rmse, m.psnr, m.ssim, m.max_abs, m.pixels_over_1_255);
+  fmt::print("            FLIP at {:.2f} px/degree: mean {:.5f}, weighted median {:.5f}, max {:.5f} (flip.png)\n", a.ppd,
+             flip.stats.mean, flip.stats.weighted_median, flip.stats.max);
   fmt::print("speed       {:.3f} s, {} fragments/s (reference {:.3f} s)\n", run.wall_seconds,
              humanCount(run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0), ref.wall_seconds);
   fmt::print("report      {}\n", (out / "report.json").string());
@@ -343,7 +381,8 @@ void addRunCommand(CLI::App& app) {
   // A later option wins, so scripts can pass defaults and users override them.
   cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cmd->add_option("--trace,-t", a->trace, "Trace file (.oitt binary or .csv)")->required();
-  cmd->add_option("--out,-o", a->out, "Output folder for image.png, image.pfm, reference.pfm, diff.png, report.json")
+  cmd->add_option("--out,-o", a->out,
+                  "Output folder for image.png, image.pfm, reference.pfm, diff.png, flip.png, report.json")
       ->required();
   std::string algos;
   for (const auto& info : model::algorithmNames()) algos += (algos.empty() ? "" : ", ") + std::string(info.name);
@@ -364,6 +403,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--samples", a->params.samples, "stochastic: samples per pixel S")->capture_default_str();
   cmd->add_option("--weight", a->params.weight, "wboit: weight equation 7, 8, 9 or 10")->capture_default_str();
   cmd->add_option("--seed", a->params.seed, "Seed of the per-fragment random hash")->capture_default_str();
+  cmd->add_option("--ppd", a->ppd,
+                  "FLIP's viewing condition, pixels per degree (default 67.02: 0.7 m from a 0.7 m wide 3840-pixel "
+                  "display; model/METRICS.md)");
   cmd->add_option("--background", a->background, "Clear colour r,g,b (linear) where no opaque fragment landed")
       ->delimiter(',')
       ->expected(3)

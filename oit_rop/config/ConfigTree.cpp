@@ -238,8 +238,8 @@ const std::vector<Property>& registry() {
       enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},
                   "cycle: every stage evaluated on each cycle where one can move (the reference); approximate "
                   "(experimental): each fragment visited once, its stage times computed from the resources' free "
-                  "times; 1.8-2.1x faster on the bench trace, same image and counts, frame cycles -1.1 to "
-                  "+7.0 % on nine of ten test configurations, -26 % with a tiny cache (DESIGN.md)"),
+                  "times; same image and counts; its speed in bench/RESULTS-timing.md, its frame cycles against "
+                  "the cycle engine's in DESIGN.md"),
   };
   return props;
 }
