@@ -31,6 +31,7 @@ struct TimingResult {
   model::RenderCounts counts;
   nlohmann::json stats;       // sections timing, fragments, memory, lock, cache, skips, depth, timeseries, per_draw
   double wall_seconds = 0.0;  // not in stats: stats are deterministic
+  uint64_t pool_bytes = 0;    // the algorithm's poolBytes() after the run (A-buffer nodes)
 };
 
 // The file a VCD path names: SystemC appends ".vcd" unless the path ends in it.
