@@ -98,6 +98,27 @@ TEST_F(CliRunSeeds, SeedsWriteFlickerBesideTheMainRun) {
   EXPECT_EQ(readJson(fn + "/report.json")["image"]["order"], "race");
 }
 
+// lock.mode is a sweep axis like any ROP parameter (the generic dotted-key
+// axes): one point per mode, each with its image.order and lost updates.
+TEST_F(CliRunSeeds, LockModeIsASweepAxis) {
+  const std::string spec = dir_->file("modes.json"), out = dir_->file("modes_sweep");
+  writeText(spec, R"({"traces": [")" + small_ + R"("], "base": {"algo": "alpha", "format": "rgba8t8z32"},
+                      "axes": {"lock.mode": ["ordered", "unordered", "none"]}})");
+  CliResult r = runOitsim("sweep " + spec + " --out " + out + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto res = readJson(out + "/results.json");
+  ASSERT_EQ(res["points"].size(), 3u);
+  const char* order[] = {"submission", "lock_entry", "race"};
+  const char* mode[] = {"ordered", "unordered", "none"};
+  for (unsigned i = 0; i < 3; ++i) {
+    const auto& p = res["points"][i];
+    EXPECT_EQ(p["status"], "ok");
+    EXPECT_EQ(p["metrics"]["lock.mode"], mode[i]);
+    EXPECT_EQ(p["metrics"]["image.order"], order[i]);
+    EXPECT_TRUE(p["metrics"].contains("lock.lost_updates"));
+  }
+}
+
 // The issue's acceptance scene: particles at 640x360, MLAB k = 2 in the
 // paper's 8-byte rows, igpu, 8 seeds. Ordered: every seed's image the same
 // (no flicker); unordered and none: some pixels differ between seeds, and
