@@ -57,10 +57,10 @@ rop::TimingResult SeedRuns::run(const std::string& trace, uint32_t width, uint32
 }
 
 model::Image SeedRuns::addFlicker(nlohmann::json& report, const model::Image& reference) const {
-  const model::FlickerMetrics fm = model::measureFlicker(images, reference);
+  model::FlickerMetrics fm = model::measureFlicker(images, reference, reports::kFlickerPngScale);
   report["image"]["flicker"] = reports::flickerJson(fm, input_seeds, stats, "flicker.png");
   report["image"]["files"]["flicker_png"] = "flicker.png";
-  return model::flickerImage(images, reports::kFlickerPngScale);
+  return std::move(fm.image);
 }
 
 void printFlicker(const nlohmann::json& f) {

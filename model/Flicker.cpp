@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 namespace oit::model {
 
@@ -20,32 +21,20 @@ void checkImages(std::span<const Image> images) {
   }
 }
 
-// Calls f(pixel, std, differs) for every pixel: the largest channel's
-// standard deviation of the sRGB8 codes across the images, exact (integer
-// sums: N sum(c^2) - (sum c)^2 = N^2 variance).
+// f(i) for i in [0, n) on up to `threads` threads (each takes every threads-th i).
 template <class F>
-void forEachPixel(std::span<const Image> images, F&& f) {
-  const size_t pixels = images[0].pixels.size();
-  const uint64_t n = images.size();
-  for (size_t p = 0; p < pixels; ++p) {
-    uint64_t worst = 0;  // the largest N^2 variance of the three channels
-    bool differs = false;
-    for (int ch = 0; ch < 3; ++ch) {
-      uint64_t sum = 0, sq = 0;
-      uint8_t lo = 255, hi = 0;
-      for (const Image& img : images) {
-        const Rgb& c = img.pixels[p];
-        const uint8_t v = toSrgb8(ch == 0 ? c.r : ch == 1 ? c.g : c.b);
-        sum += v;
-        sq += uint64_t(v) * v;
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-      }
-      worst = std::max(worst, n * sq - sum * sum);
-      differs |= lo != hi;
-    }
-    f(p, std::sqrt(double(worst)) / double(n), differs);
+void parallelFor(size_t n, unsigned threads, F&& f) {
+  threads = unsigned(std::min<size_t>(std::max(1u, threads), n));
+  if (threads <= 1) {
+    for (size_t i = 0; i < n; ++i) f(i);
+    return;
   }
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < threads; ++t)
+    pool.emplace_back([&, t] {
+      for (size_t i = t; i < n; i += threads) f(i);
+    });
+  for (auto& th : pool) th.join();
 }
 
 }  // namespace
@@ -55,38 +44,66 @@ float srgb8ToLinear(uint8_t code) {
   return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
 }
 
-FlickerMetrics measureFlicker(std::span<const Image> images, const Image& reference) {
+FlickerMetrics measureFlicker(std::span<const Image> images, const Image& reference, double image_scale,
+                              unsigned threads) {
   checkImages(images);
+  if (!(image_scale >= 0) || !std::isfinite(image_scale))
+    throw std::invalid_argument("flicker: the image scale must be >= 0 and finite");
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  const size_t n = images.size(), pixels = images[0].pixels.size();
   FlickerMetrics m;
-  m.images = unsigned(images.size());
+  m.images = unsigned(n);
+  // Each image's sRGB8 codes once (the encoding is most of the work), and its
+  // error against the reference, image by image in parallel.
+  std::vector<uint8_t> codes(n * pixels * 3);
+  m.errors.resize(n);
+  parallelFor(n, threads, [&](size_t i) {
+    uint8_t* c = codes.data() + i * pixels * 3;
+    for (const Rgb& p : images[i].pixels) {
+      *c++ = toSrgb8(p.r);
+      *c++ = toSrgb8(p.g);
+      *c++ = toSrgb8(p.b);
+    }
+    m.errors[i] = compareImages(images[i], reference);
+  });
+  if (image_scale > 0) m.image = Image(images[0].width, images[0].height);
+  // Per pixel and channel: N^2 variance = N sum(c^2) - (sum c)^2, exact in integers.
   double sum = 0.0;
-  forEachPixel(images, [&](size_t, double std, bool differs) {
+  const uint64_t nn = n;
+  for (size_t p = 0; p < pixels; ++p) {
+    uint64_t worst = 0;
+    bool differs = false;
+    for (size_t ch = 0; ch < 3; ++ch) {
+      uint64_t s = 0, sq = 0;
+      uint8_t lo = 255, hi = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const uint8_t v = codes[(i * pixels + p) * 3 + ch];
+        s += v;
+        sq += uint64_t(v) * v;
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+      worst = std::max(worst, nn * sq - s * s);
+      differs |= lo != hi;
+    }
+    const double std = std::sqrt(double(worst)) / double(n);
     sum += std;
     m.max_std = std::max(m.max_std, std);
     m.differing_pixels += differs;
-  });
-  const size_t pixels = images[0].pixels.size();
+    if (image_scale > 0) {
+      const float v = srgb8ToLinear(uint8_t(std::min(255.0, std::round(image_scale * std))));
+      m.image.pixels[p] = {v, v, v};
+    }
+  }
   m.mean_std = pixels ? sum / double(pixels) : 0.0;
   m.differing_fraction = pixels ? double(m.differing_pixels) / double(pixels) : 0.0;
   double rmse_sum = 0.0;
-  for (const Image& img : images) {
-    m.errors.push_back(compareImages(img, reference));
-    rmse_sum += m.errors.back().rmse;
-    m.rmse_worst = std::max(m.rmse_worst, m.errors.back().rmse);
+  for (const ImageMetrics& e : m.errors) {
+    rmse_sum += e.rmse;
+    m.rmse_worst = std::max(m.rmse_worst, e.rmse);
   }
-  m.rmse_mean = std::min(m.rmse_worst, rmse_sum / double(images.size()));  // (rounding never above the worst)
+  m.rmse_mean = std::min(m.rmse_worst, rmse_sum / double(n));  // (rounding never above the worst)
   return m;
-}
-
-Image flickerImage(std::span<const Image> images, double scale) {
-  checkImages(images);
-  if (!(scale > 0) || !std::isfinite(scale)) throw std::invalid_argument("flicker: the scale must be > 0 and finite");
-  Image out(images[0].width, images[0].height);
-  forEachPixel(images, [&](size_t p, double std, bool) {
-    const float v = srgb8ToLinear(uint8_t(std::min(255.0, std::round(scale * std))));
-    out.pixels[p] = {v, v, v};
-  });
-  return out;
 }
 
 }  // namespace oit::model

@@ -24,15 +24,17 @@ struct FlickerMetrics {
   // largest RMSE among them.
   std::vector<ImageMetrics> errors;
   double rmse_mean = 0.0, rmse_worst = 0.0;
+  // With an image scale > 0: the per-pixel standard deviation as a grey image
+  // whose 8-bit sRGB PNG code is min(255, round(scale x std)) (writePng
+  // writes it so); empty otherwise.
+  Image image;
 };
 
-// Throws std::invalid_argument when there is no image, the sizes differ or a
-// pixel is not finite.
-FlickerMetrics measureFlicker(std::span<const Image> images, const Image& reference);
-
-// The per-pixel standard deviation of measureFlicker() as a grey image whose
-// 8-bit sRGB PNG code is min(255, round(scale x std)) (writePng writes it so).
-Image flickerImage(std::span<const Image> images, double scale);
+// Spreads the work over up to `threads` threads (0: the machine's cores).
+// Throws std::invalid_argument when there is no image, the sizes differ, a
+// pixel is not finite or the scale is negative or not finite.
+FlickerMetrics measureFlicker(std::span<const Image> images, const Image& reference, double image_scale = 0.0,
+                              unsigned threads = 0);
 
 // The linear value whose toSrgb8() is `code` (exact for every code 0..255).
 float srgb8ToLinear(uint8_t code);

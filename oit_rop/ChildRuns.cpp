@@ -14,6 +14,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "traces/TempFiles.hpp"
+
 namespace oit::rop {
 
 namespace {
@@ -155,6 +157,7 @@ void stopAll(std::vector<Child>& active) {
       int status = 0;
       while (::waitpid(c.pid, &status, 0) < 0 && errno == EINTR) {
       }
+      unregisterChildProcess(c.pid);
     }
   }
   active.clear();
@@ -207,9 +210,13 @@ std::vector<TimingResult> runTimingInChildren(const std::vector<TimingJob>& jobs
         }
         if (pid == 0) {
           ::close(fd[0]);
-          for (const Child& c : active) ::close(c.fd);  // the other children's pipes are not ours
+          for (const Child& c : active) {  // the other children are not this one's
+            ::close(c.fd);
+            unregisterChildProcess(c.pid);
+          }
           childMain(jobs[next], fd[1]);
         }
+        registerChildProcess(pid);  // an interrupt of this process reaches the child too
         ::close(fd[1]);
         Child c;
         c.job = next++;
@@ -240,6 +247,7 @@ std::vector<TimingResult> runTimingInChildren(const std::vector<TimingJob>& jobs
         int status = 0;
         while (::waitpid(c.pid, &status, 0) < 0 && errno == EINTR) {
         }
+        unregisterChildProcess(c.pid);
         c.pid = -1;
         if (!c.error.empty()) fail(c.job, c.error);
         if (!c.have_result || !WIFEXITED(status) || WEXITSTATUS(status) != 0)

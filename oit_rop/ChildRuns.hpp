@@ -36,7 +36,9 @@ struct ChildRunOptions {
 // and returns their results in job order. A job that throws, or a child that
 // dies, stops the others (SIGTERM to each by its pid, then waited for) and is
 // rethrown as std::runtime_error("<name>: <the job's message>"). Flushes
-// stdout and stderr before each fork.
+// stdout and stderr before each fork. The children are registered with
+// registerChildProcess (traces/TempFiles.hpp), so a signal that interrupts
+// this process reaches them too.
 std::vector<TimingResult> runTimingInChildren(const std::vector<TimingJob>& jobs, const ChildRunOptions& options);
 
 // The cores this process may run on (sched_getaffinity; at least 1).

@@ -62,21 +62,29 @@ TEST(Flicker, IdenticalImagesDoNotFlicker) {
   EXPECT_GT(m.rmse_worst, 0.0);
 }
 
-// flicker.png: code = min(255, round(scale x std)).
+// flicker.png: code = min(255, round(scale x std)); the same figures on one
+// thread or several.
 TEST(Flicker, ImageScalesTheStandardDeviation) {
   const std::vector<Image> imgs{grey({10, 0, 100, 0}), grey({10, 255, 110, 0})};
-  const Image f = flickerImage(imgs, 8.0);
+  const FlickerMetrics m = measureFlicker(imgs, imgs[0], 8.0, 1);
+  const Image& f = m.image;
+  ASSERT_EQ(f.width, 2u);
   EXPECT_EQ(toSrgb8(f.pixels[0].r), 0u);
   EXPECT_EQ(toSrgb8(f.pixels[1].g), 255u);  // std 127.5 x 8 clamps
   EXPECT_EQ(toSrgb8(f.pixels[2].b), 40u);   // std 5 x 8
   EXPECT_EQ(toSrgb8(f.pixels[3].r), 0u);
+  const FlickerMetrics t = measureFlicker(imgs, imgs[1], 8.0, 2);
+  EXPECT_EQ(t.image.pixels, f.pixels);
+  EXPECT_EQ(t.mean_std, m.mean_std);
+  EXPECT_EQ(t.errors[0].rmse, m.errors[1].rmse);  // the reference swapped
+  EXPECT_TRUE(measureFlicker(imgs, imgs[0]).image.pixels.empty());  // no scale, no image
 }
 
 TEST(Flicker, BadInputIsRefused) {
   EXPECT_THROW(measureFlicker({}, Image(1, 1)), std::invalid_argument);
   const std::vector<Image> mixed{Image(1, 1), Image(2, 1)};
   EXPECT_THROW(measureFlicker(mixed, Image(1, 1)), std::invalid_argument);
-  EXPECT_THROW(flickerImage(std::vector<Image>{Image(1, 1)}, 0.0), std::invalid_argument);
+  EXPECT_THROW(measureFlicker(std::vector<Image>{Image(1, 1)}, Image(1, 1), -1.0), std::invalid_argument);
 }
 
 }  // namespace
