@@ -215,8 +215,10 @@ void runReplay(RunArgs& a) {
   // Per pixel at least: the algorithm's arrays, the reference A-buffer's head
   // (4 B), the opaque layer (depth + colour, 16 B) and three RGB float images
   // (image, reference, difference).
-  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12,
-                         "the " + a.algo + " arrays, the reference and the images");
+  // (--seeds N: the parent also keeps every seed's image and its sRGB8 codes, 15 B per pixel each.)
+  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12 + 15 * uint64_t(a.seeds),
+                         "the " + a.algo + " arrays, the reference and the images" +
+                             (a.seeds_given ? fmt::format(" and {} seeds' images", a.seeds) : ""));
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
 
 

@@ -62,6 +62,12 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
     EXPECT_EQ(r.output, "oitsim: error: " + message + "\n");
     EXPECT_FALSE(fs::exists(out));
   }
+  // The parent keeps every seed's image: more seeds than memory holds are refused up front.
+  CliResult r = runOitsim("run -q -t " + small_ + " -o " + out + " --seeds 4000000000");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output.rfind("oitsim: error: " + small_ + ": a 64 x 48 frame needs at least ", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find("and 4000000000 seeds' images"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // The report says which order made the image; --seeds writes flicker.png and
