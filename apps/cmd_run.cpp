@@ -1,7 +1,8 @@
 // oitsim run: replay a trace through an OIT algorithm and write the image, the
 // A-buffer reference, the enhanced difference and report.json. The timing mode
 // (default) replays it through the SystemC ROP and adds cycles, stalls, DRAM
-// traffic and footprint; its image is the functional one by construction.
+// traffic and footprint; its image is the functional one by construction with
+// lock.mode=ordered (image.order). --seeds N: apps/RunSeeds.hpp.
 //
 // Nothing is written until the whole run has succeeded: a bad trace (which the
 // reader reports with file, byte offset, record and field) leaves no report.

@@ -1,7 +1,8 @@
 // The timing mode of oitsim: replays a fragment trace through the SystemC ROP
-// model (OitRop) and returns the image (bit-identical to FunctionalRenderer's
-// by construction) with the timing, traffic and lock statistics. The schema of
-// `stats` is in oit_rop/DESIGN.md.
+// model (OitRop) and returns the image (with lock.mode = ordered bit-identical
+// to FunctionalRenderer's by construction; with unordered or none in the
+// order the timing decides, DESIGN.md "Ordering") with the timing, traffic and
+// lock statistics. The schema of `stats` is in oit_rop/DESIGN.md.
 //
 // SystemC elaborates once per process: runTiming() may be called once per
 // process (it throws std::logic_error on a second call).
