@@ -1,7 +1,8 @@
 // oitsim run: replay a trace through an OIT algorithm and write the image, the
 // A-buffer reference, the enhanced difference and report.json. The timing mode
 // (default) replays it through the SystemC ROP and adds cycles, stalls, DRAM
-// traffic and footprint; its image is the functional one by construction.
+// traffic and footprint; its image is the functional one by construction with
+// lock.mode=ordered (image.order). --seeds N: apps/RunSeeds.hpp.
 //
 // Nothing is written until the whole run has succeeded: a bad trace (which the
 // reader reports with file, byte offset, record and field) leaves no report.
@@ -19,6 +20,7 @@
 #include "apps/Progress.hpp"
 #include "model/AlgorithmSettings.hpp"
 #include "model/Flip.hpp"
+#include "apps/RunSeeds.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
@@ -46,6 +48,8 @@ struct RunArgs {
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   bool quiet = false;
   std::string command_line;  // recorded in the report
+  unsigned seeds = 0;        // --seeds N (0: not given)
+  bool seeds_given = false;
 };
 
 struct TimedRender {
@@ -163,10 +167,12 @@ void checkOptions(const RunArgs& a) {
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
+  checkOrderingOptions(a.mode, a.seeds_given, a.seeds);
 }
 
 // The files a run writes into --out, the report last.
-constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "report.json"};
+constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "flicker.png",
+                                    "report.json"};
 
 // Output files are staged under temporary names and renamed together at the
 // end; a run that fails or is interrupted leaves none of them behind.
@@ -226,6 +232,7 @@ void runReplay(RunArgs& a) {
   // mode, so a bad --preset, --config or --set fails at once and never passes
   // silently in functional mode (which does not use it).
   const rop::ConfigTree tree = rop::resolveTree(a.preset, a.config_file, a.sets);
+  checkOrderingOptions(a.mode, a.seeds_given, a.seeds, &tree.config());
   if (!a.vcd.empty()) {
     try {
       rop::checkVcdWritable(a.vcd);
@@ -240,13 +247,16 @@ void runReplay(RunArgs& a) {
   // Per pixel at least: the algorithm's arrays, the reference A-buffer's head
   // (4 B), the opaque layer (depth + colour, 16 B) and three RGB float images
   // (image, reference, difference).
-  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12,
-                         "the " + a.algo + " arrays, the reference and the images");
+  // (--seeds N: the parent also keeps every seed's image and its sRGB8 codes, 15 B per pixel each.)
+  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12 + 15 * uint64_t(a.seeds),
+                         "the " + a.algo + " arrays, the reference and the images" +
+                             (a.seeds_given ? fmt::format(" and {} seeds' images", a.seeds) : ""));
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
 
 
   TimedRender run;
   nlohmann::json timing_stats;
+  SeedRuns seed_runs;
   // SystemC writes the VCD in place while it runs: a temporary until the run succeeded.
   TempFile vcd(a.vcd.empty() ? std::string() : rop::vcdFilePath(a.vcd));
   if (timing) {
@@ -255,11 +265,13 @@ void runReplay(RunArgs& a) {
     to.clear_colour = clear;
     to.vcd_path = a.vcd;
     to.progress = [&](double fraction, const std::string& what) { progress.update(fraction, what); };
-    rop::TimingResult t = rop::runTiming(*src, *algo, tree.config(), to);
+    rop::TimingResult t = a.seeds_given ? seed_runs.run(a.trace, a.width, a.height, a.algo, a.params, a.seeds,
+                                                        tree.config(), to, progress)
+                                        : rop::runTiming(*src, *algo, tree.config(), to);
     progress.finish();
     run.result.image = std::move(t.image);
     run.result.counts = t.counts;
-    run.result.state_bytes = uint64_t(h.width) * h.height * algo->bytesPerPixel() + algo->poolBytes();
+    run.result.state_bytes = uint64_t(h.width) * h.height * algo->bytesPerPixel() + t.pool_bytes;
     run.wall_seconds = t.wall_seconds;
     timing_stats = std::move(t.stats);
   } else {
@@ -319,8 +331,11 @@ void runReplay(RunArgs& a) {
                   {"diff_png", "diff.png"},
                   {"flip_png", "flip.png"}}},
                 {"reference", "abuffer"},
+                {"order", imageOrder(a.mode, tree.config())},
                 {"metrics", metricsJson(m)}};
   j["image"]["metrics"]["flip"] = flipJson(flip, a.ppd);
+  model::Image flicker;
+  if (a.seeds_given) flicker = seed_runs.addFlicker(j, ref.result.image);
   j["sim"] = {{"wall_seconds", run.wall_seconds},
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
@@ -349,6 +364,7 @@ void runReplay(RunArgs& a) {
   model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
   model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
   model::writeFlipPng(flip, staged.stage(out / "flip.png"));
+  if (a.seeds_given) model::writePng(flicker, staged.stage(out / "flicker.png"));
   reports::writeJsonReport(staged.stage(out / "report.json"), j);
   staged.commit();
   vcd.keep();
@@ -368,6 +384,7 @@ void runReplay(RunArgs& a) {
              m.rmse, m.psnr, m.ssim, m.max_abs, m.pixels_over_1_255);
   fmt::print("            FLIP at {:.2f} px/degree: mean {:.5f}, weighted median {:.5f}, max {:.5f} (flip.png)\n", a.ppd,
              flip.stats.mean, flip.stats.weighted_median, flip.stats.max);
+  if (a.seeds_given) printFlicker(j["image"]["flicker"]);
   fmt::print("speed       {:.3f} s, {} fragments/s (reference {:.3f} s)\n", run.wall_seconds,
              humanCount(run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0), ref.wall_seconds);
   fmt::print("report      {}\n", (out / "report.json").string());
@@ -414,7 +431,12 @@ void addRunCommand(CLI::App& app) {
   CLI::Option* height =
       cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (1..65535)");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
-  cmd->callback([a, width, height, vcd] {
+  CLI::Option* seeds = cmd->add_option(
+      "--seeds", a->seeds,
+      "Timing mode: replay the frame with N shader-latency seeds (input.seed, +1, ...) on every core; adds "
+      "flicker.png and image.flicker (seed 0's run is the main image and report)");
+  cmd->callback([a, width, height, vcd, seeds] {
+    a->seeds_given = seeds->count() > 0;
     a->command_line = commandLine();
     a->vcd_given = vcd->count() > 0;
     a->width_given = width->count() > 0;

@@ -45,6 +45,8 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   for (unsigned o = 0; o < model::kOutcomeCount; ++o)
     rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
+  if (front_.defersInserts())
+    rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
   payload_.set_data_ptr(dummy_data);
   node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);

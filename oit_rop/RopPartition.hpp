@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/stages/BlendArrayRmw.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/stages/EarlyDepth.hpp"
@@ -86,6 +87,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   const BlendArrayCache& cache() const { return cache_; }
   const EarlyDepth& earlyDepth() const { return early_; }
   const BlendAlu& alu() const { return alu_; }
+  // lock.mode unordered / none: the inserts this partition made (nullptr when ordered).
+  const BlendArrayRmw* rmw() const { return rmw_.get(); }
 
  private:
   // The engines move fragments through this partition's stages and time.
@@ -188,6 +191,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   PixelLock lock_;
   BlendArrayCache cache_;
   BlendAlu alu_;
+  std::unique_ptr<BlendArrayRmw> rmw_;  // lock.mode unordered / none: inserts at lock entry
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases

@@ -162,8 +162,11 @@ const std::vector<Property>& registry() {
               "scoreboard entries per partition: fragments between issue and lock release"),
       enumeration("lock.granularity", &R::lock, &LockConfig::granularity, {"pixel", "quad", "tile"},
                   "interlock scope: one pixel, a 2x2 quad or a whole screen tile"),
-      boolean("lock.ordered", &R::lock, &LockConfig::ordered,
-              "admit overlapping fragments in submission order (ROV); false = unordered interlock"),
+      enumeration("lock.mode", &R::lock, &LockConfig::mode, {"ordered", "unordered", "none"},
+                  "ordered: a lock address's fragments enter in submission order (ROV, PixelSync), the image is "
+                  "the functional model's; unordered: one at a time in the order they reach the lock, the image "
+                  "follows that order; none: no interlock, racing read-modify-writes lose updates (counted); "
+                  "unordered and none need sim.engine=cycle (DESIGN.md)"),
       boolean("lock.per_primitive", &R::lock, &LockConfig::per_primitive,
               "quad/tile granularity: the fragments of one primitive take the lock together (they never overlap "
               "each other); false = each waits for every older fragment of its quad/tile (an upper bound)"),
@@ -237,7 +240,7 @@ const std::vector<Property>& registry() {
               "requests interleave (1 = lockstep; DESIGN.md)"),
       enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},
                   "cycle: every stage evaluated on each cycle where one can move (the reference); approximate "
-                  "(experimental): each fragment visited once, its stage times computed from the resources' free "
+                  "(experimental, lock.mode=ordered only): each fragment visited once, its stage times computed from the resources' free "
                   "times; same image and counts; its speed in bench/RESULTS-timing.md, its frame cycles against "
                   "the cycle engine's in DESIGN.md"),
   };
@@ -265,7 +268,20 @@ size_t editDistance(std::string_view a, std::string_view b) {
   return row[b.size()];
 }
 
+// Properties that were replaced: setting one is an error naming its successor.
+struct Retired {
+  std::string_view path, message;
+};
+constexpr Retired kRetired[] = {
+    {"lock.ordered",
+     "'lock.ordered' was replaced by lock.mode (ordered | unordered | none): lock.ordered=true is "
+     "lock.mode=ordered; lock.ordered=false is lock.mode=unordered, whose image now follows the order the "
+     "fragments enter the lock (oit_rop/DESIGN.md)"},
+};
+
 [[noreturn]] void unknownPath(std::string_view path) {
+  for (const Retired& r : kRetired)
+    if (r.path == path) throw std::invalid_argument(std::string(r.message));
   // A group name ("lock") lists its properties.
   std::vector<std::string> members;
   const std::string prefix = std::string(path) + ".";
@@ -393,6 +409,22 @@ Value parseJson(const Property& p, const nlohmann::json& j) {
 }
 
 }  // namespace
+
+std::string approximateLockModeProblem(LockMode mode) {
+  return fmt::format(
+      "lock.mode={} is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
+      "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or lock.mode=ordered",
+      lockModeName(mode));
+}
+
+const char* lockModeName(LockMode m) {
+  switch (m) {
+    case LockMode::Ordered: return "ordered";
+    case LockMode::Unordered: return "unordered";
+    case LockMode::None: return "none";
+  }
+  return "?";
+}
 
 const char* toString(PropertyType t) {
   switch (t) {
@@ -540,6 +572,10 @@ void ConfigTree::validate() const {
         "partitions.count ({}) at clock.core_mhz ({} MHz): partition resume offsets of up to {} ps do not fit in half "
         "a {:.1f} ps cycle; use fewer partitions or a slower clock",
         c.partitions.count, c.clock.core_mhz, c.partitions.count, 1e6 / c.clock.core_mhz));
+  // The approximate engine visits fragments in submission order and applies
+  // no insert out of that order (DESIGN.md): it refuses what it cannot model.
+  if (c.sim.engine == SimEngine::Approximate && c.lock.mode != LockMode::Ordered)
+    errs.push_back(approximateLockModeProblem(c.lock.mode));
   // Single-field limits hold by construction via set(); recheck in case the
   // struct was edited directly (a programmatic caller).
   for (const auto& p : registry()) {
@@ -550,6 +586,8 @@ void ConfigTree::validate() const {
       errs.push_back(e.what());
     }
   }
+  // One problem is one line; several are listed one per line.
+  if (errs.size() == 1) throw std::invalid_argument(fmt::format("invalid configuration (preset {}): {}", c.preset, errs[0]));
   if (!errs.empty())
     throw std::invalid_argument(fmt::format("invalid configuration (preset {}):\n  {}", c.preset,
                                             fmt::join(errs, "\n  ")));

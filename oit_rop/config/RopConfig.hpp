@@ -11,6 +11,11 @@ namespace oit::rop {
 
 enum class LockGranularity : uint8_t { Pixel, Quad, Tile };  // quad = 2x2 pixels
 enum class LockRelease : uint8_t { EndOfBlend, EndOfShader };
+// What the interlock guarantees (oit_rop/DESIGN.md, "Ordering"): ordered = each
+// lock address's fragments enter in submission order (ROV, PixelSync);
+// unordered = one at a time, in the order the timing model lets them in;
+// none = no interlock, racing read-modify-writes (lost updates counted).
+enum class LockMode : uint8_t { Ordered, Unordered, None };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
@@ -47,7 +52,7 @@ struct EarlyDepthConfig {
 struct LockConfig {
   unsigned capacity = 256;                // scoreboard entries (fragments in flight between issue and release)
   LockGranularity granularity = LockGranularity::Pixel;
-  bool ordered = true;                    // admit in submission order per lock address
+  LockMode mode = LockMode::Ordered;      // ordered, unordered or no interlock
   bool per_primitive = true;              // quad/tile: one primitive's fragments hold the lock together
   LockRelease release = LockRelease::EndOfBlend;
   unsigned shader_tail = 20;              // cycles from end of blend to end of shader (EndOfShader release)

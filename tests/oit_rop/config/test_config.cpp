@@ -177,7 +177,7 @@ TEST(ConfigTree, SetEachType) {
   t.set("lock.release", "end_of_shader");
   t.set("input.latency_model", "fixed");
   t.set("skip.idle_cycles", "false");
-  t.set("lock.ordered", "off");
+  t.set("lock.mode", "none");
   t.set("dram.channel_gbps", "17.066");
   t.set("dram.channels", " 3 ");
   t.set("cache.size_bytes", "256KiB");
@@ -187,7 +187,7 @@ TEST(ConfigTree, SetEachType) {
   EXPECT_EQ(c.lock.release, LockRelease::EndOfShader);
   EXPECT_EQ(c.input.latency_model, LatencyModel::Fixed);
   EXPECT_FALSE(c.skip.idle_cycles);
-  EXPECT_FALSE(c.lock.ordered);
+  EXPECT_EQ(c.lock.mode, LockMode::None);
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 17.066);
   EXPECT_EQ(c.dram.channels, 3u);
   EXPECT_EQ(c.cache.size_bytes, 262144u);
@@ -209,6 +209,46 @@ TEST(ConfigTree, UnknownPathSuggestsClosest) {
   e = errorOf([&] { t.set("completely.unrelated.thing", "1"); });
   EXPECT_NE(e.find("groups: clock"), std::string::npos) << e;
   EXPECT_EQ(e.find("did you mean"), std::string::npos) << e;
+}
+
+// lock.mode names the interlock; the boolean it replaced (lock.ordered) is
+// refused naming its successor, from --set and from a file alike; an unknown
+// mode lists the three.
+TEST(ConfigTree, LockModeAndTheRetiredOrderedFlag) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_EQ(t.config().lock.mode, LockMode::Ordered);  // the default: the functional model's order
+  for (const auto& [name, mode] : {std::pair{"ordered", LockMode::Ordered}, std::pair{"unordered", LockMode::Unordered},
+                                   std::pair{"none", LockMode::None}}) {
+    t.set("lock.mode", name);
+    EXPECT_EQ(t.config().lock.mode, mode);
+    EXPECT_STREQ(lockModeName(mode), name);
+  }
+  const std::string retired =
+      "'lock.ordered' was replaced by lock.mode (ordered | unordered | none): lock.ordered=true is "
+      "lock.mode=ordered; lock.ordered=false is lock.mode=unordered, whose image now follows the order the fragments "
+      "enter the lock (oit_rop/DESIGN.md)";
+  EXPECT_EQ(errorOf([&] { t.set("lock.ordered", "false"); }), retired);
+  TempFile old("old.json", R"({"lock": {"ordered": false}})");
+  EXPECT_EQ(errorOf([&] { t.loadJson(old.path()); }), old.path() + ": key 'lock/ordered': " + retired);
+  EXPECT_EQ(errorOf([&] { t.set("lock.mode", "sometimes"); }),
+            "lock.mode: 'sometimes' is not a known value; expected one of ordered | unordered | none");
+}
+
+// The approximate engine does not model unordered or unlocked inserts: one
+// line naming both settings, instead of running them as ordered.
+TEST(ConfigTree, ApproximateEngineRefusesLockModesItDoesNotModel) {
+  for (const char* mode : {"unordered", "none"}) {
+    ConfigTree t = ConfigTree::forPreset("igpu");
+    t.set("sim.engine", "approximate");
+    t.set("lock.mode", mode);
+    EXPECT_EQ(errorOf([&] { t.validate(); }),
+              std::string("invalid configuration (preset igpu): lock.mode=") + mode +
+                  " is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
+                  "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or "
+                  "lock.mode=ordered");
+    t.set("lock.mode", "ordered");
+    EXPECT_NO_THROW(t.validate());
+  }
 }
 
 TEST(ConfigTree, BadValues) {
@@ -343,7 +383,7 @@ TEST(ConfigTree, CacheGeometry) {
 
 TEST(ConfigTree, JsonNestedAndDotted) {
   TempFile f("nested.json", R"({
-    "lock": {"granularity": "quad", "ordered": false},
+    "lock": {"granularity": "quad", "mode": "unordered"},
     "dram.channels": 4,
     "dram": {"channel_gbps": 20.5},
     "cache": {"size_bytes": "128KiB"},
@@ -354,7 +394,7 @@ TEST(ConfigTree, JsonNestedAndDotted) {
   t.loadJson(f.path());
   const RopConfig& c = t.config();
   EXPECT_EQ(c.lock.granularity, LockGranularity::Quad);
-  EXPECT_FALSE(c.lock.ordered);
+  EXPECT_EQ(c.lock.mode, LockMode::Unordered);
   EXPECT_EQ(c.dram.channels, 4u);
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 20.5);
   EXPECT_EQ(c.cache.size_bytes, 131072u);
