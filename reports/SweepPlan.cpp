@@ -124,6 +124,9 @@ std::vector<std::string> settingKeys(const std::string& axis, const AxisValue& v
 }
 
 bool isRopSetting(const std::string& key) { return key == "preset" || key == "config" || key.find('.') != std::string::npos; }
+// What a functional point ignores: the ROP configuration, and the timing runs'
+// seeds (`oitsim run --seeds` is for timing mode only).
+bool ignoredByFunctional(const std::string& key) { return isRopSetting(key) || key == "seeds"; }
 
 // Why a point ignores `key` ("" when it uses it): its algorithm ignores the run
 // setting, or it is functional, which ignores the ROP configuration.
@@ -131,7 +134,7 @@ std::string whyIgnored(const std::string& key, const std::string& algo, bool fun
                        const std::vector<std::string>& ignored_by_algo) {
   if (std::find(ignored_by_algo.begin(), ignored_by_algo.end(), key) != ignored_by_algo.end())
     return algo + " ignores " + key;
-  if (functional && isRopSetting(key)) return "functional points ignore " + key;
+  if (functional && ignoredByFunctional(key)) return "functional points ignore " + key;
   return "";
 }
 
@@ -266,6 +269,7 @@ Plan planSweep(const ojson& spec, const std::string& specPath, const fs::path& o
       }
       p.args = {"run", "--trace", t.path, "--out", exeOut + "/points/" + p.id, "--quiet"};
       for (const auto& [k, v] : s.options) {
+        if (functional && k == "seeds") continue;  // run refuses --seeds in functional mode
         p.args.push_back(runOptions().at(k));
         p.args.push_back(v);
       }
@@ -297,7 +301,7 @@ std::string duplicatesLine(const Plan& plan) {
     std::string who = "functional";
     for (size_t i = 0; i + 1 < kept->args.size(); ++i)
       if (kept->args[i] == "--algo") who = kept->args[i + 1];
-    for (const auto& s : d.ignored) by_setting[s].insert(isRopSetting(s) ? std::string("functional points") : who);
+    for (const auto& s : d.ignored) by_setting[s].insert(ignoredByFunctional(s) ? std::string("functional points") : who);
   }
   std::string detail;
   for (const auto& [setting, who] : by_setting) {

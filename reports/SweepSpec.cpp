@@ -25,7 +25,7 @@ const std::map<std::string, std::string>& runOptions() {
   static const std::map<std::string, std::string> kOptions = {
       {"algo", "--algo"},   {"layers", "--layers"},   {"format", "--format"},   {"preset", "--preset"},
       {"mode", "--mode"},   {"bits", "--bits"},       {"samples", "--samples"}, {"weight", "--weight"},
-      {"seed", "--seed"},   {"background", "--background"}, {"config", "--config"}};
+      {"seed", "--seed"},   {"background", "--background"}, {"config", "--config"}, {"seeds", "--seeds"}};
   return kOptions;
 }
 
@@ -94,6 +94,8 @@ void validateSetting(const std::string& key, const ojson& v, const std::string& 
     if (!isWhole(v, 1)) bad("a positive integer");
   } else if (key == "bits" || key == "samples" || key == "weight" || key == "seed") {
     if (!isWhole(v, 0)) bad("a non-negative integer");
+  } else if (key == "seeds") {
+    if (!isWhole(v, 1)) bad("a positive integer (shader-latency seeds per timing point, `oitsim run --seeds`)");
   } else if (key == "background") {
     std::vector<ojson> c;
     if (v.is_array()) {

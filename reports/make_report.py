@@ -19,7 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from htmlreport import bottleneck, curves, data, images, memory, page, pareto, speed, tables  # noqa: E402
+from htmlreport import bottleneck, curves, data, images, memory, ordering, page, pareto, speed, tables  # noqa: E402
 from htmlreport.page import esc, fmt_num  # noqa: E402
 from htmlreport.plots import Styles  # noqa: E402
 from htmlreport.speed import speed_modes, speed_plot  # noqa: E402,F401  (tests import speed_modes from here)
@@ -86,6 +86,8 @@ def scene_section(scene, tp, all_tp, res, configs, styles, trace_paths, out_dir,
     if any(data.is_timing(p) for p in tp):
         body.append("<h3>Where the time goes</h3>" + bottleneck.section(tp, scene, configs, log))
     body.append("<h3>Cost against image error</h3>" + pareto.section(tp, scene, configs, styles, log))
+    if ordering.applies(tp):
+        body.append("<h3>The price of order</h3>" + ordering.section(tp, scene, configs, styles, log))
     cv = curves.section(tp, scene, res.get("axes", []), configs, styles, log)
     if cv:
         body.append("<h3>Against k and the other numeric axes</h3>" + cv)

@@ -237,14 +237,20 @@ class Configs:
 
 def image_settings(p):
     """What besides algorithm and k decides a point's image (hardware does not:
-    the timing model changes when, never what): format, bits, samples, weight,
-    seed and background, where the algorithm uses them."""
+    with lock.mode=ordered the timing model changes when, never what): format,
+    bits, samples, weight, seed and background, where the algorithm uses them,
+    and the insert order where the timing run drew the image."""
     m = p["metrics"]
     ignored = json_list(m, "config.ignored_settings") or []
     parts = []
     for key in ("format", "bits", "samples", "weight", "seed"):
         if key not in ignored and key != "layers" and m.get(f"config.{key}") is not None:
             parts.append(f"{key} {m.get(f'config.{key}')}")
+    # With lock.mode unordered or none the timing run draws the image (its
+    # order: lock entry or racing writes), so those images are kept apart.
+    order = m.get("image.order")
+    if order not in (None, "submission"):
+        parts.append(f"order {order} ({m.get('lock.mode')})")
     bg = m.get("config.background")
     if bg not in (None, "[0.0,0.0,0.0]", "[0,0,0]"):
         parts.append(f"background {bg}")

@@ -99,6 +99,40 @@ print(c.all_labels(ps))
                  "['dgpu', 'igpu cache.ways=4', 'igpu cache.ways=8', 'functional model']\n");
 }
 
+// The price of order (issue 23): a scene whose timing points differ in
+// lock.mode gets the section; modes are compared on the same machine (the
+// lock mode is not part of the machine's name there), the table lists each
+// mode's frame time, waits, lost updates, error and flicker, and images
+// drawn by the timing run (unordered, none) are told apart from the
+// submission-order one. A scene with one mode does not get it.
+TEST(ReportSections, ThePriceOfOrderComparesTheLockModesOfOneMachine) {
+  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";
+  const std::string out = python(R"py(
+from htmlreport import ordering
+from htmlreport.plots import Styles
+def pt(mode, us, wait, lost, rmse, std, order):
+    m = {"timing.cycles": 1000, "timing.frame_time_us": us, "config.rop.preset": "dgpu",
+         "config.rop.lock.mode": mode, "lock.mode": mode, "lock.wait_cycles": wait, "lock.lost_updates": lost,
+         "image.metrics.rmse": rmse, "image.flicker.std_mean": std, "image.flicker.differing_fraction": std / 10,
+         "image.order": order, "config.algorithm": "mlab", "config.layers": 2,
+         "config.ignored_settings": "[\"bits\",\"samples\",\"weight\",\"seed\"]"}
+    return {"id": mode, "trace": "t", "axes": {}, "status": "ok", "metrics": m}
+ps = [pt("ordered", 100.0, 5000, 0, 0.01, 0.0, "submission"), pt("unordered", 90.0, 3000, 0, 0.012, 0.5, "lock_entry"),
+      pt("none", 80.0, 0, 1234, 0.02, 2.0, "race")]
+c = data.Configs(ps)
+print(ordering.applies(ps), ordering.applies(ps[:1]))
+print(sorted({ordering._machine(p, c) for p in ps}))
+html = ordering.section(ps, "t", c, Styles({"mlab"}), lambda s: None)
+for s in ["lock.mode", "lost updates", "1,234", "flickering pixels (%)", "<img"]:
+    print(s in html)
+print([data.image_settings(p) for p in ps])
+)py");
+  EXPECT_EQ(out, "True False\n"
+                 "['dgpu']\n"
+                 "True\nTrue\nTrue\nTrue\nTrue\n"
+                 "['', 'order lock_entry (unordered)', 'order race (none)']\n");
+}
+
 // Numbers with thousands separators (the table printed 5.554e+08).
 TEST(ReportSections, NumbersHaveThousandsSeparators) {
   if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib absent (scripts/setup.sh installs it)";

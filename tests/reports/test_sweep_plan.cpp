@@ -125,5 +125,29 @@ TEST_F(SweepPlanTest, PlanFilesReadBackAndCommandsReproduceEachPoint) {
   EXPECT_THROW(readPlan(dir_ / "nowhere"), std::invalid_argument);
 }
 
+// `seeds` (oitsim run --seeds N, issue 23's flicker) goes to timing points
+// only: `run` refuses it in functional mode, so a functional point runs
+// without it and differs from its twin only in an ignored setting.
+TEST_F(SweepPlanTest, SeedsGoToTimingPointsOnly) {
+  const Plan p = plan(R"({"traces": [{"gen": "glass", "width": 32, "height": 24}],
+    "base": {"seeds": 4}, "axes": {"mode": ["timing", "functional"], "lock.mode": ["ordered", "none"]}})");
+  EXPECT_EQ(p.combinations, 4u);
+  ASSERT_EQ(p.points.size(), 3u);  // functional x lock.mode: one run
+  auto has = [](const Point& pt, const std::string& a, const std::string& b) {
+    for (size_t i = 0; i + 1 < pt.args.size(); ++i)
+      if (pt.args[i] == a && pt.args[i + 1] == b) return true;
+    return false;
+  };
+  EXPECT_TRUE(has(p.points[0], "--seeds", "4"));
+  EXPECT_TRUE(has(p.points[1], "--seeds", "4"));
+  EXPECT_FALSE(has(p.points[2], "--seeds", "4"));
+  EXPECT_TRUE(has(p.points[2], "--mode", "functional"));
+  const std::string e = planError(R"({"traces": [{"gen": "glass"}], "base": {"seeds": 0}})");
+  EXPECT_NE(e.find("s.json: base.seeds: expected a positive integer (shader-latency seeds per timing point, "
+                   "`oitsim run --seeds`), got 0"),
+            std::string::npos)
+      << e;
+}
+
 }  // namespace
 }  // namespace oit::sweep
