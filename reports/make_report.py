@@ -97,8 +97,9 @@ def scene_section(scene, tp, all_tp, res, configs, styles, trace_paths, out_dir,
         body.append("<h3>Memory (as the MLAB paper's Table 1)</h3>" + mem)
     grid, ref_uri = images.scene_grid(tp, scene, out_dir, log)
     body.append("<h3>Images</h3><p class='note'>Per algorithm and k: the image, and under it its |difference| x4 "
-                "(left) and its FLIP map (right). An image does not depend on the hardware configuration (the "
-                "timing model decides when, never what), so one grid serves every machine. Click any thumbnail "
+                "(left) and its FLIP map (right). With lock.mode=ordered an image does not depend on the hardware "
+                "configuration (the timing model decides when, never what), so one grid serves every machine; "
+                "images the timing run drew (lock.mode unordered or none) are labelled with their order. Click any thumbnail "
                 "for the full-size image; click that to swap it with the reference.</p>" +
                 images.colourbar_html() + grid)
     log(f"{scene}: depth complexity")
