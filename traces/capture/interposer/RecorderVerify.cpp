@@ -1,0 +1,183 @@
+// --verify inside the retracer: each captured transparent draw is drawn a second
+// time, before the recording draw, into the interposer's own RGBA32F target (cleared
+// to 0 at the frame's first such draw) with the application's blend state and a copy
+// of the application's depth buffer, the injected code counting fragments per pixel.
+// At the swap, the target and the counts go into the stream (kVerify).
+#include <algorithm>
+#include <vector>
+
+#include "traces/capture/interposer/Recorder.hpp"
+
+namespace oit::capture::interposer {
+
+using namespace stream;
+
+void Recorder::ensureVerifyTarget() {
+  RealGl& g = gl();
+  if (verify_fb_ && verify_w_ == frame_w_ && verify_h_ == frame_h_) return;
+  GLint saved_tex = 0, saved_rb = 0, saved_fb = 0;
+  g.glGetIntegerv(GL_TEXTURE_BINDING_2D, &saved_tex);
+  g.glGetIntegerv(GL_RENDERBUFFER_BINDING, &saved_rb);
+  g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &saved_fb);
+  if (!verify_fb_) {
+    g.glGenFramebuffers(1, &verify_fb_);
+    g.glGenBuffers(1, &count_buffer_);
+  }
+  // A new texture of the new size (immutable storage cannot be resized).
+  g.glGenTextures(1, &verify_colour_);
+  g.glBindTexture(GL_TEXTURE_2D, verify_colour_);
+  g.glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, static_cast<GLsizei>(frame_w_), static_cast<GLsizei>(frame_h_));
+  g.glBindTexture(GL_TEXTURE_2D, static_cast<GLuint>(saved_tex));
+  g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, verify_fb_);
+  g.glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, verify_colour_, 0);
+  g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(saved_fb));
+  verify_depth_format_ = 0;  // re-created at the new size when needed
+  GLint saved_buf = 0;
+  g.glGetIntegerv(GL_COPY_WRITE_BUFFER_BINDING, &saved_buf);
+  g.glBindBuffer(GL_COPY_WRITE_BUFFER, count_buffer_);
+  g.glBufferData(GL_COPY_WRITE_BUFFER, static_cast<GLsizeiptr>(uint64_t(frame_w_) * frame_h_ * 4), nullptr,
+                 GL_DYNAMIC_READ);
+  g.glBindBuffer(GL_COPY_WRITE_BUFFER, static_cast<GLuint>(saved_buf));
+  g.glBindRenderbuffer(GL_RENDERBUFFER, static_cast<GLuint>(saved_rb));
+  verify_w_ = frame_w_;
+  verify_h_ = frame_h_;
+  verify_used_ = false;
+}
+
+// Copies the application's depth buffer into the verify target's, in the same
+// format (a blit of depth demands it); no depth attachment when the application
+// has no depth buffer (the test then passes, as in GL).
+void Recorder::copyDepth(GLint app_fb) {
+  RealGl& g = gl();
+  const GLenum attachment = app_fb ? GL_DEPTH_ATTACHMENT : GL_DEPTH;
+  GLint type = GL_NONE;
+  g.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, attachment, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE,
+                                          &type);
+  GLint depth_bits = 0, stencil_bits = 0, component = 0;
+  if (type != GL_NONE) {
+    g.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, attachment, GL_FRAMEBUFFER_ATTACHMENT_DEPTH_SIZE,
+                                            &depth_bits);
+    g.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, attachment,
+                                            GL_FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE, &component);
+    const GLenum stencil_attachment = app_fb ? GL_STENCIL_ATTACHMENT : GL_STENCIL;
+    GLint stype = GL_NONE;
+    g.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, stencil_attachment,
+                                            GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &stype);
+    if (stype != GL_NONE)
+      g.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, stencil_attachment,
+                                              GL_FRAMEBUFFER_ATTACHMENT_STENCIL_SIZE, &stencil_bits);
+  }
+  GLint saved_read = 0;
+  g.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &saved_read);
+  g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, verify_fb_);
+  if (depth_bits == 0) {
+    g.glFramebufferRenderbuffer(GL_DRAW_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, 0);
+    return;
+  }
+  const GLenum format = [&]() -> GLenum {
+    const bool is_float = component == GL_FLOAT;
+    if (stencil_bits > 0) return is_float ? GL_DEPTH32F_STENCIL8 : GL_DEPTH24_STENCIL8;
+    if (is_float) return static_cast<GLenum>(GL_DEPTH_COMPONENT32F);
+    if (depth_bits <= 16) return static_cast<GLenum>(GL_DEPTH_COMPONENT16);
+    if (depth_bits <= 24) return static_cast<GLenum>(GL_DEPTH_COMPONENT24);
+    return static_cast<GLenum>(GL_DEPTH_COMPONENT32);
+  }();
+  if (format != verify_depth_format_) {
+    GLint saved_rb = 0;
+    g.glGetIntegerv(GL_RENDERBUFFER_BINDING, &saved_rb);
+    g.glGenRenderbuffers(1, &verify_depth_);
+    g.glBindRenderbuffer(GL_RENDERBUFFER, verify_depth_);
+    g.glRenderbufferStorage(GL_RENDERBUFFER, format, static_cast<GLsizei>(verify_w_), static_cast<GLsizei>(verify_h_));
+    g.glBindRenderbuffer(GL_RENDERBUFFER, static_cast<GLuint>(saved_rb));
+    verify_depth_format_ = format;
+  }
+  g.glFramebufferRenderbuffer(GL_DRAW_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, 0);
+  const GLenum ours = stencil_bits > 0 ? GL_DEPTH_STENCIL_ATTACHMENT : GL_DEPTH_ATTACHMENT;
+  g.glFramebufferRenderbuffer(GL_DRAW_FRAMEBUFFER, ours, GL_RENDERBUFFER, verify_depth_);
+  g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(app_fb));
+  const bool scissor = g.glIsEnabled(GL_SCISSOR_TEST);
+  if (scissor) g.glDisable(GL_SCISSOR_TEST);
+  const GLint w = static_cast<GLint>(verify_w_), h = static_cast<GLint>(verify_h_);
+  g.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  if (scissor) g.glEnable(GL_SCISSOR_TEST);
+  g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(saved_read));
+}
+
+void Recorder::enterVerify(Pending& p) {
+  RealGl& g = gl();
+  ensureVerifyTarget();
+  g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &p.saved_draw_fb);
+  g.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &p.saved_read_fb);
+  if (!verify_used_) {
+    // The frame's first verify drawing: clear the target and the counters. Clears
+    // obey the scissor and the colour mask: both off for the clear.
+    g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, verify_fb_);
+    const bool scissor = g.glIsEnabled(GL_SCISSOR_TEST);
+    if (scissor) g.glDisable(GL_SCISSOR_TEST);
+    GLboolean mask[4] = {};
+    g.glGetBooleani_v(GL_COLOR_WRITEMASK, 0, mask);
+    g.glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    const float zero[4] = {0, 0, 0, 0};
+    g.glClearBufferfv(GL_COLOR, 0, zero);
+    g.glColorMask(mask[0], mask[1], mask[2], mask[3]);
+    if (scissor) g.glEnable(GL_SCISSOR_TEST);
+    g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(p.saved_draw_fb));
+    zeroBuffer(count_buffer_, static_cast<GLsizeiptr>(uint64_t(verify_w_) * verify_h_ * 4));
+    verify_used_ = true;
+  }
+  if (p.chunk.state.depth_test)
+    copyDepth(p.saved_draw_fb);  // leaves the verify target bound for drawing
+  else {
+    g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, verify_fb_);
+    g.glFramebufferRenderbuffer(GL_DRAW_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, 0);
+  }
+  p.counts = bindStorage(count_binding_, count_buffer_);
+  g.glProgramUniform1ui(p.chunk.program, p.info->loc_width, verify_w_);
+  g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 2);
+}
+
+void Recorder::leaveVerify(Pending& p) {
+  RealGl& g = gl();
+  g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 0);
+  restoreStorage(count_binding_, p.counts);
+  g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(p.saved_draw_fb));
+  g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(p.saved_read_fb));
+}
+
+void Recorder::writeVerify() {
+  RealGl& g = gl();
+  const FrameChunk f{frame_, frame_w_, frame_h_, 0};
+  const size_t pixels = size_t(frame_w_) * frame_h_;
+  std::vector<float> rgba(pixels * 4, 0.0f);
+  std::vector<uint32_t> counts(pixels, 0);
+  if (verify_used_ && verify_w_ == frame_w_ && verify_h_ == frame_h_) {
+    g.glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+    GLint saved_read = 0, saved_pack = 0, align = 4, row = 0, skip_rows = 0, skip_pixels = 0;
+    g.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &saved_read);
+    g.glGetIntegerv(GL_PIXEL_PACK_BUFFER_BINDING, &saved_pack);
+    g.glGetIntegerv(GL_PACK_ALIGNMENT, &align);
+    g.glGetIntegerv(GL_PACK_ROW_LENGTH, &row);
+    g.glGetIntegerv(GL_PACK_SKIP_ROWS, &skip_rows);
+    g.glGetIntegerv(GL_PACK_SKIP_PIXELS, &skip_pixels);
+    g.glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    g.glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    g.glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+    g.glPixelStorei(GL_PACK_SKIP_ROWS, 0);
+    g.glPixelStorei(GL_PACK_SKIP_PIXELS, 0);
+    g.glBindFramebuffer(GL_READ_FRAMEBUFFER, verify_fb_);
+    g.glReadPixels(0, 0, static_cast<GLsizei>(frame_w_), static_cast<GLsizei>(frame_h_), GL_RGBA, GL_FLOAT,
+                   rgba.data());
+    g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(saved_read));
+    g.glBindBuffer(GL_PIXEL_PACK_BUFFER, static_cast<GLuint>(saved_pack));
+    g.glPixelStorei(GL_PACK_ALIGNMENT, align);
+    g.glPixelStorei(GL_PACK_ROW_LENGTH, row);
+    g.glPixelStorei(GL_PACK_SKIP_ROWS, skip_rows);
+    g.glPixelStorei(GL_PACK_SKIP_PIXELS, skip_pixels);
+    readBuffer(count_buffer_, 0, static_cast<GLsizeiptr>(pixels * 4), counts.data());
+  }
+  // Payload: the frame chunk; then the image and the counts.
+  write(kVerify, &f, sizeof f, rgba.data(), rgba.size() * sizeof(float));
+  std::fwrite(counts.data(), sizeof(uint32_t), counts.size(), out_);
+}
+
+}  // namespace oit::capture::interposer
