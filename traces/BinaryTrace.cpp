@@ -14,6 +14,7 @@
 #include "traces/AtomicFile.hpp"
 #include "traces/TraceBackends.hpp"
 #include "traces/TraceFormat.hpp"
+#include "traces/DrawStateTable.hpp"
 #include "traces/TraceRules.hpp"
 
 namespace oit::detail {
@@ -139,10 +140,9 @@ void BinaryReader::parseHeader() {
                      size_, fv::kFixedHeaderBytes));
   const unsigned char* h = map_;
   header_.version = load<uint32_t>(h + fv::kOffVersion);
-  if (header_.version != fv::kVersion)
+  if (header_.version != fv::kVersion && header_.version != fv::kVersion2)
     fail(fv::kOffVersion, std::nullopt, "version",
-         fmt::format("unsupported version {}: this build reads version {}", header_.version,
-                     fv::kVersion));
+         fmt::format("unsupported version {}: this build reads versions 1 and 2", header_.version));
   const uint32_t header_bytes = load<uint32_t>(h + fv::kOffHeaderBytes);
   header_.width = load<uint32_t>(h + fv::kOffWidth);
   header_.height = load<uint32_t>(h + fv::kOffHeight);
@@ -191,12 +191,13 @@ void BinaryReader::parseHeader() {
   if (draw_count > fv::kMaxDraws)
     fail(fv::kOffDrawCount, std::nullopt, "draw_count",
          fmt::format("draw_count {} exceeds the limit {}", draw_count, fv::kMaxDraws));
-  const uint64_t min_header = fv::headerBytesFor(draw_count);
+  const uint64_t min_header = fv::headerBytesFor(draw_count, header_.version);
   if (header_bytes % 64 != 0 || header_bytes < min_header)
     fail(fv::kOffHeaderBytes, std::nullopt, "header_bytes",
          fmt::format("header_bytes {}: expected a multiple of 64 and at least {} (64 + 64 x {} "
-                     "draws)",
-                     header_bytes, min_header, draw_count));
+                     "draws{})",
+                     header_bytes, min_header, draw_count,
+                     header_.version == fv::kVersion2 ? " + 32 x draws of draw state, rounded up to 64" : ""));
   if (size_ < header_bytes) {
     std::string where = size_ < min_header
                             ? fmt::format("inside draw table entry {}",
@@ -238,6 +239,9 @@ void BinaryReader::parseHeader() {
       fail(entry + fv::kDrawOffName, std::nullopt, fmt::format("draw[{}].name", i), *p);
     header_.draws.push_back(std::move(d));
   }
+  if (header_.version == fv::kVersion2)
+    if (auto p = readDrawStates(h + fv::drawStateTableOffset(draw_count), header_.draws))
+      fail(p->offset, std::nullopt, p->field, p->message);
 
   // Record count against the file size: catches truncation at open.
   if (count == fv::kUnfinishedCount)
@@ -340,14 +344,14 @@ const TraceHeader& checkedHeader(const std::string& path, const TraceHeader& h) 
 BinaryWriter::BinaryWriter(const std::string& path, const TraceHeader& header)
     : header_(checkedHeader(path, header)),
       record_bytes_(fv::recordBytes(header.encoding)),
-      data_offset_(fv::headerBytesFor(header.draws.size())),
+      data_offset_(fv::headerBytesFor(header.draws.size(), header.version)),
       file_(path) {
   rules_.width = header_.width;
   rules_.height = header_.height;
   rules_.draws = DrawSet(header_.draws);
   std::vector<unsigned char> h(data_offset_, 0);
   std::memcpy(h.data() + fv::kOffMagic, fv::kMagic, sizeof fv::kMagic);
-  store<uint32_t>(&h[fv::kOffVersion], fv::kVersion);
+  store<uint32_t>(&h[fv::kOffVersion], header_.version);
   store<uint32_t>(&h[fv::kOffHeaderBytes], static_cast<uint32_t>(data_offset_));
   store<uint32_t>(&h[fv::kOffWidth], header_.width);
   store<uint32_t>(&h[fv::kOffHeight], header_.height);
@@ -367,6 +371,8 @@ BinaryWriter::BinaryWriter(const std::string& path, const TraceHeader& header)
     store<uint32_t>(e + fv::kDrawOffClass, static_cast<uint32_t>(d.cls));
     std::memcpy(e + fv::kDrawOffName, d.name.data(), d.name.size());
   }
+  if (header_.version == fv::kVersion2)
+    writeDrawStates(&h[fv::drawStateTableOffset(header_.draws.size())], header_.draws);
   file_.append(h.data(), h.size());
 }
 

@@ -15,6 +15,7 @@
 #include "traces/AtomicFile.hpp"
 #include "traces/TraceBackends.hpp"
 #include "traces/TraceFormat.hpp"
+#include "traces/DrawStateTable.hpp"
 #include "traces/TraceRules.hpp"
 
 namespace oit::detail {
@@ -204,6 +205,11 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
   }
   rules_.width = header_.width;
   rules_.height = header_.height;
+  if (header_.version == fv::kVersion2)
+    for (const DrawInfo& d : header_.draws)
+      if (!d.state)
+        fail(in_.offset(), std::nullopt, "draw-state",
+             fmt::format("version 2: draw {} has no '# draw-state' line", d.id));
 
   // Pass 1: validate every row, count them, complete the draw table.
   uint64_t count = 0;
@@ -291,7 +297,7 @@ void CsvReader::parseMetadata(std::string_view line) {
   };
   const bool after_columns = data_offset_ != 0;
   const bool known = key == "oitsim-trace" || key == "width" || key == "height" ||
-                     key == "camera" || key == "encoding" || key == "draw";
+                     key == "camera" || key == "encoding" || key == "draw" || key == "draw-state";
   if (!known) return;  // a free comment
   if (after_columns)
     err(fmt::format("'# {}' metadata must come before the column line '{}'", key, kColumnLine));
@@ -299,8 +305,9 @@ void CsvReader::parseMetadata(std::string_view line) {
   if (key == "oitsim-trace") {
     const std::string_view v = t.next();
     if (meta_version_) err("duplicate '# oitsim-trace' line");
-    if (v != "v1")
-      err(fmt::format("unsupported version '{}': this build reads v1", v));
+    if (v != "v1" && v != "v2")
+      err(fmt::format("unsupported version '{}': this build reads v1 and v2", v));
+    header_.version = v == "v2" ? fv::kVersion2 : fv::kVersion;
     meta_version_ = true;
     expectEnd();
   } else if (key == "width" || key == "height") {
@@ -334,6 +341,18 @@ void CsvReader::parseMetadata(std::string_view line) {
       err(fmt::format("bad encoding '{}': expected fp32 or unorm8", v));
     meta_encoding_ = true;
     expectEnd();
+  } else if (key == "draw-state") {  // format v2: after the draw's own line
+    if (header_.version != fv::kVersion2) err("'# draw-state' lines need '# oitsim-trace v2' first");
+    uint32_t id = 0;
+    const std::string_view v = t.next();
+    auto it = parseNumber(v, id) ? draws_.find(id) : draws_.end();
+    if (it == draws_.end()) err(fmt::format("'{}' is not the id of a draw declared above", v));
+    DrawInfo& d = header_.draws[it->second.index];
+    if (d.state) err(fmt::format("duplicate '# draw-state' line for draw {}", id));
+    oit::DrawState s;
+    if (auto p = parseDrawStateCsv(t.rest(), s)) err(*p);
+    d.state = s;
+    if (auto p = drawStateProblem(d, it->second.index)) err(p->message);
   } else {  // draw ID CLASS "NAME"
     DrawInfo d;
     const std::string_view id = t.next();
@@ -448,6 +467,8 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
     // The table's limit is checked here, at the row that would break it (the
     // binary writer would only find out after the whole first pass).
     if (header_.draws.size() >= fv::kMaxDraws) err(kDraw, start[kDraw], tooManyDraws(f.draw));
+    if (header_.version == fv::kVersion2)
+      err(kDraw, start[kDraw], fmt::format("draw {} is not declared: version 2 declares every draw with its state", f.draw));
     // Undeclared draw: named after its id, classed by its opaque column.
     draws_.emplace(f.draw, DrawState{header_.draws.size(), false, in_.number()});
     header_.draws.push_back(DrawInfo{f.draw, cls, fmt::format("draw{}", f.draw)});
@@ -515,12 +536,15 @@ CsvWriter::CsvWriter(const std::string& path, const TraceHeader& header)
   for (const DrawInfo& d : header_.draws) classes_[d.id] = d.cls;
   fmt::memory_buffer m;
   auto out = std::back_inserter(m);
-  fmt::format_to(out, "# oitsim-trace v1\n# width {}\n# height {}\n", header_.width, header_.height);
+  fmt::format_to(out, "# oitsim-trace v{}\n# width {}\n# height {}\n", header_.version, header_.width,
+                 header_.height);
   if (header_.camera)
     fmt::format_to(out, "# camera {} {}\n", header_.camera->near_plane, header_.camera->far_plane);
   fmt::format_to(out, "# encoding {}\n", toString(header_.encoding));
-  for (const DrawInfo& d : header_.draws)
+  for (const DrawInfo& d : header_.draws) {
     fmt::format_to(out, "# draw {} {} {}\n", d.id, toString(d.cls), quoteName(d.name));
+    if (d.state) fmt::format_to(out, "# draw-state {}\n", drawStateCsv(d));
+  }
   fmt::format_to(out, "{}\n", kColumnLine);
   first_record_line_ = static_cast<uint64_t>(std::count(m.begin(), m.end(), '\n')) + 1;
   file_.append(m.data(), m.size());

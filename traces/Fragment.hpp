@@ -31,10 +31,34 @@ enum class ColourEncoding : uint32_t {
   Unorm8 = 1,  // compact unorm8 RGBA, 20-byte records
 };
 
+// How the application drew a captured draw (format v2, FORMAT.md section 3.1): the
+// blend mode of colour attachment 0, the depth state and the GL blend enums.
+enum class BlendMode : uint8_t {
+  Off = 0,            // opaque
+  Over = 1,           // SRC_ALPHA, ONE_MINUS_SRC_ALPHA
+  PremultipliedOver = 2,  // ONE, ONE_MINUS_SRC_ALPHA
+  Additive = 3,       // SRC_ALPHA or ONE, ONE
+  Multiplicative = 4, // DST_COLOR, ZERO or ZERO, SRC_COLOR
+  Other = 5,          // any other equation or factors
+};
+struct DrawState {
+  BlendMode blend = BlendMode::Off;
+  bool depth_test = false, depth_write = false;
+  uint16_t depth_func = 0;  // GL enum (0x0201 GL_LESS ...), 0 without the test
+  uint16_t blend_eq_rgb = 0, blend_src_rgb = 0, blend_dst_rgb = 0;  // GL enums, 0 with blending off
+  uint16_t blend_eq_alpha = 0, blend_src_alpha = 0, blend_dst_alpha = 0;
+  uint64_t fragments = 0;  // fragments the draw produced
+  // The model blends only Off, Over and PremultipliedOver; the records of other
+  // modes are kept out of the trace (the draw stays in the table, not modelled).
+  bool recorded() const { return blend <= BlendMode::PremultipliedOver; }
+  bool operator==(const DrawState&) const = default;
+};
+
 struct DrawInfo {
   uint32_t id = 0;
   DrawClass cls = DrawClass::Transparent;
   std::string name;
+  std::optional<DrawState> state = std::nullopt;  // format v2 only (every draw has one there)
 };
 
 // Optional camera planes, for view-space weights (WBOIT eq. 7-9).
@@ -61,6 +85,7 @@ struct TraceHeader {
 };
 
 const char* toString(DrawClass c);
+const char* toString(BlendMode m);
 const char* toString(ColourEncoding e);
 
 }  // namespace oit

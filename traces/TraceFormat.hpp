@@ -13,6 +13,9 @@ namespace oit::format_v1 {
 // file for text, and CR LF / ^Z catch text-mode line-ending conversion.
 inline constexpr unsigned char kMagic[8] = {0x89, 'O', 'I', 'T', 'T', '\r', '\n', 0x1A};
 inline constexpr uint32_t kVersion = 1;
+// Version 2 = version 1 + a draw state table after the draw table (section 3.1);
+// written only for traces whose draws carry a DrawState (apitrace captures).
+inline constexpr uint32_t kVersion2 = 2;
 
 // Fixed header: 64 bytes.
 inline constexpr size_t kFixedHeaderBytes = 64;
@@ -52,6 +55,23 @@ inline constexpr uint32_t kMaxFrameSize = 65535;  // x, y are u16
 // multiple of 64 and skip the extra bytes).
 inline constexpr uint64_t headerBytesFor(uint64_t draw_count) {
   return kFixedHeaderBytes + draw_count * kDrawEntryBytes;
+}
+
+// Draw state table (version 2): 32 bytes per draw, right after the draw table.
+inline constexpr size_t kDrawStateEntryBytes = 32;
+inline constexpr size_t kStateOffBlend = 0;      // u8, BlendMode
+inline constexpr size_t kStateOffDepth = 1;      // u8, bit 0 depth test, bit 1 depth write
+inline constexpr size_t kStateOffDepthFunc = 2;  // u16, GL enum
+inline constexpr size_t kStateOffBlendEnums = 4; // u16 x 6: eq, src, dst (RGB), eq, src, dst (alpha)
+inline constexpr size_t kStateOffFragments = 16; // u64
+inline constexpr size_t kStateOffReserved = 24;  // u8[8], zero
+inline constexpr uint64_t drawStateTableOffset(uint64_t draw_count) {
+  return kFixedHeaderBytes + draw_count * kDrawEntryBytes;
+}
+// header_bytes of a file of the given version written by this library.
+inline constexpr uint64_t headerBytesFor(uint64_t draw_count, uint32_t version) {
+  if (version < kVersion2) return headerBytesFor(draw_count);
+  return (drawStateTableOffset(draw_count) + draw_count * kDrawStateEntryBytes + 63) / 64 * 64;
 }
 
 inline constexpr uint32_t kFp32RecordBytes = 32;

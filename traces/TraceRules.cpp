@@ -6,6 +6,7 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "traces/DrawStateTable.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::detail {
@@ -96,7 +97,18 @@ std::string fmtFloat(float v) {
 
 const std::array<float, 256> kUnorm8ToFloat = makeUnorm8Table();
 
-DrawSet::DrawSet(const std::vector<DrawInfo>& draws) {
+DrawSet::DrawSet(const std::vector<DrawInfo>& all) {
+  // Records may name only draws whose fragments are recorded (format v2 keeps those
+  // of blend modes the model does not blend out of the records).
+  std::vector<DrawInfo> draws;
+  draws.reserve(all.size());
+  for (const DrawInfo& d : all) {
+    if (d.state && !d.state->recorded())
+      unrecorded_.push_back(d.id);
+    else
+      draws.push_back(d);
+  }
+  std::sort(unrecorded_.begin(), unrecorded_.end());
   uint32_t max_id = 0;
   for (const DrawInfo& d : draws) max_id = std::max(max_id, d.id);
   dense_ = max_id < kDenseIdLimit;
@@ -207,7 +219,11 @@ std::optional<Violation> checkRecord(const Fragment& f, const RecordRules& rules
     if (auto msg = unitMessage(field, v)) return Violation{field, *msg};
   if (!rules.draws.contains(f.draw))
     return Violation{fv::Field::Draw,
-                     fmt::format("unknown draw id {}: not in the header's draw table", f.draw)};
+                     rules.draws.unrecorded(f.draw)
+                         ? fmt::format("draw {} is not modelled (its blend mode is not off, over or "
+                                       "premultiplied over): version 2 keeps its fragments out of the records",
+                                       f.draw)
+                         : fmt::format("unknown draw id {}: not in the header's draw table", f.draw)};
   return std::nullopt;
 }
 
@@ -276,10 +292,9 @@ void checkHeaderForWrite(const std::string& file, const TraceHeader& h) {
   auto fail = [&](size_t offset, std::string field, const std::string& msg) {
     throw TraceError(file, offset, std::nullopt, std::move(field), msg);
   };
-  if (h.version != fv::kVersion)
+  if (h.version != fv::kVersion && h.version != fv::kVersion2)
     fail(fv::kOffVersion, "version",
-         fmt::format("cannot write version {}: this library writes version {}", h.version,
-                     fv::kVersion));
+         fmt::format("cannot write version {}: this library writes versions 1 and 2", h.version));
   const std::pair<const char*, uint32_t> sizes[] = {{"width", h.width}, {"height", h.height}};
   for (size_t i = 0; i < 2; ++i) {
     const auto [name, v] = sizes[i];
@@ -310,6 +325,7 @@ void checkHeaderForWrite(const std::string& file, const TraceHeader& h) {
                        static_cast<uint32_t>(d.cls)));
     if (auto p = drawNameProblem(d.name)) fail(entry + fv::kDrawOffName, fmt::format("draw[{}].name", i), *p);
   }
+  if (auto p = headerStatesProblem(h)) fail(p->offset, p->field, p->message);
 }
 
 }  // namespace oit::detail

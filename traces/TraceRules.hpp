@@ -31,6 +31,8 @@ class DrawSet {
   // Dense form only: known()[min(id, limit())] != 0 iff id is in the set.
   const uint8_t* known() const { return known_.data(); }
   uint32_t limit() const { return limit_; }
+  // A draw of the table whose fragments are not recorded (format v2, not modelled).
+  bool unrecorded(uint32_t id) const { return std::binary_search(unrecorded_.begin(), unrecorded_.end(), id); }
 
  private:
   bool dense_ = true;
@@ -39,6 +41,7 @@ class DrawSet {
   std::vector<uint8_t> known_ = {0};
   uint32_t limit_ = 0;
   std::vector<uint32_t> sorted_;  // sparse form: ids too large for a table
+  std::vector<uint32_t> unrecorded_;
 };
 
 struct RecordRules {

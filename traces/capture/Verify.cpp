@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "model/FunctionalRenderer.hpp"
+#include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
 
 namespace oit::capture {
@@ -20,6 +21,64 @@ uint32_t ulpDistance(float a, float b) {
   };
   const int64_t d = key(a) - key(b);
   return static_cast<uint32_t>(std::min<int64_t>(d < 0 ? -d : d, UINT32_MAX));
+}
+
+namespace {
+
+// Compares the model's image with GL's RGBA (rgb only: the model keeps no alpha).
+void compareImages(const model::Image& image, const float* gl_rgba, uint32_t width, VerifyResult& v) {
+  for (size_t p = 0; p < v.pixels; ++p) {
+    const float model_rgb[3] = {image.pixels[p].r, image.pixels[p].g, image.pixels[p].b};
+    for (int c = 0; c < 3; ++c) {
+      const float gl = gl_rgba[4 * p + c];
+      ++v.channels_compared;
+      if (model_rgb[c] == gl) continue;
+      ++v.channels_differing;
+      v.max_ulps = std::max(v.max_ulps, ulpDistance(model_rgb[c], gl));
+      v.max_abs = std::max(v.max_abs, std::fabs(static_cast<double>(model_rgb[c]) - gl));
+      if (v.first_difference.empty())
+        v.first_difference = fmt::format("pixel ({}, {}) channel {}: model {:.9g}, GL {:.9g}", p % width,
+                                         p / width, "rgb"[c], model_rgb[c], gl);
+    }
+  }
+}
+
+}  // namespace
+
+TransparentVerifyResult verifyTransparentDraws(const FrameCapture& frame) {
+  if (!frame.reference) throw std::logic_error("verifyTransparentDraws: the frame has no GL reference");
+  const GlTransparentReference& ref = *frame.reference;
+  const TraceHeader& h = frame.header;
+  if (ref.width != h.width || ref.height != h.height)
+    throw std::runtime_error(fmt::format("frame {}: GL's reference is {}x{}, the trace {}x{}", frame.frame,
+                                         ref.width, ref.height, h.width, h.height));
+  TransparentVerifyResult v;
+  v.pixels = static_cast<uint64_t>(h.width) * h.height;
+  TraceHeader th = h;
+  th.draws.clear();
+  for (const DrawInfo& d : h.draws)
+    if (d.cls == DrawClass::Transparent && d.state && d.state->recorded()) {
+      th.draws.push_back(d);
+      v.premultiplied = v.premultiplied || d.state->blend == BlendMode::PremultipliedOver;
+    }
+  std::vector<Fragment> frags;
+  std::vector<uint32_t> counts(v.pixels, 0);
+  for (const Fragment& f : frame.fragments)
+    if (th.findDraw(f.draw)) {
+      frags.push_back(f);
+      ++counts[static_cast<size_t>(f.y) * h.width + f.x];
+    }
+  v.fragments = frags.size();
+  v.clamped = frame.colour_clamped + frame.premultiplied_zero_alpha;
+  for (size_t p = 0; p < v.pixels; ++p)
+    if (counts[p] != ref.count[p] && v.count_pixels_differing++ == 0)
+      v.first_difference = fmt::format("pixel ({}, {}): {} records, GL counted {}", p % h.width, p / h.width,
+                                       counts[p], ref.count[p]);
+  model::MemorySource src(th, std::move(frags));
+  auto algo = model::makeAlgorithm("alpha", {});
+  const model::RenderResult r = model::FunctionalRenderer().render(src, *algo);
+  compareImages(r.image, ref.rgba.data(), h.width, v);
+  return v;
 }
 
 VerifyResult verifyTrace(const std::string& path, const GlReference& ref) {
@@ -48,20 +107,7 @@ VerifyResult verifyTrace(const std::string& path, const GlReference& ref) {
   auto algo = model::makeAlgorithm("alpha", {});
   model::FunctionalRenderer renderer;
   const model::RenderResult r = renderer.render(*src, *algo);
-  for (size_t p = 0; p < v.pixels; ++p) {
-    const float model_rgb[3] = {r.image.pixels[p].r, r.image.pixels[p].g, r.image.pixels[p].b};
-    for (int c = 0; c < 3; ++c) {
-      const float gl = ref.rgba[4 * p + c];
-      ++v.channels_compared;
-      if (model_rgb[c] == gl) continue;
-      ++v.channels_differing;
-      v.max_ulps = std::max(v.max_ulps, ulpDistance(model_rgb[c], gl));
-      v.max_abs = std::max(v.max_abs, std::fabs(static_cast<double>(model_rgb[c]) - gl));
-      if (v.first_difference.empty())
-        v.first_difference = fmt::format("pixel ({}, {}) channel {}: model {:.9g}, GL {:.9g}", p % h.width,
-                                         p / h.width, "rgb"[c], model_rgb[c], gl);
-    }
-  }
+  compareImages(r.image, ref.rgba.data(), h.width, v);
   return v;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "traces/capture/ApitraceCapture.hpp"
 #include "traces/capture/GlCapture.hpp"
 
 namespace oit::capture {
@@ -34,6 +35,26 @@ struct VerifyResult {
 
 // Reads the trace at path (its size must be the reference's) and compares.
 VerifyResult verifyTrace(const std::string& path, const GlReference& ref);
+
+// An apitrace frame (--apitrace --verify): its transparent draws (over and
+// premultiplied over) replayed alone, in order, by the functional `alpha` algorithm
+// over black, against GL's blend of the same draws into the interposer's RGBA32F
+// target (GlTransparentReference); per-pixel record counts against that drawing's
+// counts. Straight over is exact; premultiplied colours are divided by alpha for the
+// trace and multiplied again by the model: within kPremultipliedUlpBound. Fragments
+// whose colour was clamped into [0,1] for the trace are blended unclamped by GL:
+// their pixels may differ by more (reported, counted in colour_clamped).
+struct TransparentVerifyResult : VerifyResult {
+  bool premultiplied = false;  // the frame has premultiplied-over draws
+  uint64_t clamped = 0;        // fragments whose colour the trace clamped
+  static constexpr uint32_t kPremultipliedUlpBound = 8;
+  bool passes() const {
+    if (count_pixels_differing != 0) return false;
+    if (clamped != 0) return true;  // colour not comparable (reported)
+    return premultiplied ? max_ulps <= kPremultipliedUlpBound && max_abs <= 1e-6 : channels_differing == 0;
+  }
+};
+TransparentVerifyResult verifyTransparentDraws(const FrameCapture& frame);
 
 // Distance between two finite floats in representable steps.
 uint32_t ulpDistance(float a, float b);
