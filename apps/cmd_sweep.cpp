@@ -116,7 +116,7 @@ bool isWhole(const ojson& v, long long min) {
 void validateRopParameter(const std::string& key, const ojson& v, const std::string& where) {
   const std::string text = scalarText(v, where);  // its own error names `where` once
   try {
-    rop::ConfigTree::forPreset("igpu").set(key, text);
+    rop::ConfigTree::forPreset("iris-pro-5200").set(key, text);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(where + ": " + key + " = " + v.dump() + ": " + e.what());
   }
@@ -171,8 +171,9 @@ void validateSetting(const std::string& key, const ojson& v, const std::string& 
       bad("functional or timing");
   } else if (key == "preset") {
     const auto names = rop::presetNames();
-    if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
-      bad("a ROP preset (" + joinNames(names) + ")");
+    if (!v.is_string() ||
+        std::find(names.begin(), names.end(), rop::canonicalPresetName(v.get<std::string>())) == names.end())
+      bad("a ROP preset (" + joinNames(names) + "; aliases igpu, dgpu)");
   } else if (key == "config") {
     if (!v.is_string()) bad("a ROP config file path");
     try {
@@ -489,7 +490,7 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
       }
       p.id = fmt::format("{:04d}-{}", points.size(), sanitize(label));
       // The point's ROP configuration is resolved now, as `oitsim run` resolves
-      // it in both modes (a preset unset: the config file's, else igpu), so a
+      // it in both modes (a preset unset: the config file's, else iris-pro-5200), so a
       // combination that breaks a constraint stops the sweep before anything
       // runs instead of failing every point.
       {

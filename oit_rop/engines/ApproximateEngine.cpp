@@ -56,19 +56,18 @@ void ApproximateEngine::run() {
   // flag masked by this (one test per visit instead of two).
   const uint8_t leaves_early = p.early_cull_ ? InRec::kCulled : 0;
   // What a fragment that reaches the lock does follows from its kind,
-  // culled x 4 + outcome: its blend latency, whether it writes its line and
-  // whether it appends an A-buffer node. Visits are tallied by kind, and
+  // culled x 4 + outcome: its blend latency, the lines it touches
+  // (FragmentLines) and whether it appends an A-buffer node. Visits are tallied by kind, and
   // the ALU's counts and the skips' follow from the tallies after the phase.
   constexpr unsigned kKinds = 8;
   static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
   std::array<Cycle, kKinds> blend_latency{};
-  std::array<uint8_t, kKinds> writes{}, appends{};
+  std::array<uint8_t, kKinds> appends{};
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
     const unsigned outcome = k & 3;
     blend_latency[k] = p.alu_.latencyOf(culled ? 0u : p.rows_of_[outcome]);
-    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
     appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
   }
   ShaderInput::Draw latency = p.shader_.draw(p.pass_);
@@ -105,7 +104,7 @@ void ApproximateEngine::run() {
     __builtin_prefetch(&in.at(2 * kLookahead));
     const InRec& ahead = in.at(kLookahead);
     locks.prefetch(ahead.lock);
-    p.cache_.prefetch(ahead.tile);
+    p.cache_.prefetch(p.tileOf(ahead.pixel));
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();
@@ -162,7 +161,7 @@ void ApproximateEngine::run() {
     Cycle early = passed;
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
-      early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+      early = std::max(early, p.early_.depthTileReady(issue, p.tileOf(r.pixel)) + (finish - issue));
     }
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
@@ -183,7 +182,9 @@ void ApproximateEngine::run() {
       }
       const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
       ++visits[kind];
-      const bool write = writes[kind];
+      // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
+      const uint32_t tile = p.tileOf(r.pixel);
+      const std::span<const LineTouch> lines = p.linesOf(r.pixel, uint8_t(kind));
       const Cycle lock_enter = enter;
       // Into the cache the next cycle when admitted on arrival, in the release's
       // own cycle when admitted at one (the cycle engine's stage order).
@@ -194,20 +195,20 @@ void ApproximateEngine::run() {
       // its lock wait, which already covered the older fragment that missed.
       Cycle at_cache = issue;
       bool missed;
-      Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
-      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
+      Cycle got = p.cache_.touch(at_cache, tile, lines, missed);
+      while (got == kNever) [[unlikely]] {  // the miss queue lacks entries: retry when enough free
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
-        got = p.cache_.touch(at_cache, r.tile, write, missed);
+        got = p.cache_.touch(at_cache, tile, lines, missed);
       }
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
-        fill_ready[r.tile] = ready;
+        fill_ready[tile] = ready;
       } else if (got > at_cache + hit_latency) {
-        ready = std::max(ready, fill_ready[r.tile]);
+        ready = std::max(ready, fill_ready[tile]);
       }
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));

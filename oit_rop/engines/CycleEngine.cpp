@@ -26,7 +26,7 @@ bool CycleEngine::step() {
   p.alu_.complete(now, [&](uint32_t t) {
     moved = true;
     const RopPartition::TokenInfo& k = p.tok_[t];
-    p.releaseLine(k.tile);  // the blend wrote the line: it may be evicted now
+    p.releaseLines(k.pixel, k.outcome);  // the blend wrote its lines: they may be evicted now
     if (!p.s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
       p.nodeWrite();
     if (p.cfg_.lock.release == LockRelease::EndOfShader)
@@ -66,9 +66,9 @@ bool CycleEngine::step() {
   while (p.lock_.hasReady() && accepted < p.cache_ports_) {
     const uint32_t t = p.lock_.frontReady();
     const RopPartition::TokenInfo& k = p.tok_[t];
-    const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
     Cycle r = 0;
-    if (!p.acquireGated(now, k.tile, write, r)) {
+    if (!p.acquireGated(now, k.pixel, k.outcome, r)) {
       refused = true;
       break;
     }
@@ -93,7 +93,7 @@ bool CycleEngine::step() {
   unsigned shaded = 0;
   p.shader_.finished(now, [&](uint32_t t) {
     ++shaded;
-    p.early_.push(now, t, p.tok_[t].tile, (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
+    p.early_.push(now, t, p.tileOf(p.tok_[t].pixel), (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
   });
 
   // Issue from the routed input into the shader (needs a scoreboard entry).
@@ -133,7 +133,7 @@ bool CycleEngine::step() {
     // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
     const uint8_t rows = culled ? 0 : p.rows_of_[r.outcome & 3];
     p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
-    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, rows};
+    p.tok_[t] = RopPartition::TokenInfo{r.pixel, r.flags, r.outcome, rows};
     p.shader_.issue(now, t, r.seq, p.pass_);
     q.pop();
     p.front_.popped(p.id_);
