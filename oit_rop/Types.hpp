@@ -14,6 +14,12 @@ enum class Surface : uint8_t { BlendArrays = 0, Depth = 1, Colour = 2, Resolve =
 inline constexpr unsigned kSurfaceCount = 4;
 const char* toString(Surface s);
 
+// Bits set in a sector mask; one sector (no sectors: a whole line) without a
+// call (the build targets plain x86-64, where popcount is a library call).
+inline uint32_t sectorCount(uint32_t mask) {
+  return (mask & (mask - 1)) == 0 ? (mask != 0) : uint32_t(__builtin_popcount(mask));
+}
+
 // Calls fn(first, end) for each run of consecutive set bits of `mask` (the
 // sectors a cache moves in one request: a fill or a write-back per run).
 template <class Fn>

@@ -69,6 +69,7 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, const TileLines& lines,
   }
   // (A fragment asks for every line it touches at once: one per line at most.)
   scratch_index_.reserve(64);
+  scratch_busy_.reserve(cfg.miss_queue);
 }
 
 BlendArrayCache::~BlendArrayCache() = default;
@@ -122,16 +123,27 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     misses += index == kInvalid || (t.fill & ~lines_[index].valid) != 0;
   }
   // A free miss-queue entry per missing line (one whose line is available by now).
+  uint32_t busy = 0;  // entries in flight before this access
   if (misses != 0 && miss_queue_max_ > now) {
-    uint32_t free = 0;
-    for (Cycle c : miss_queue_) free += c <= now;
-    if (free < misses) {
-      // Exact: the (misses - free)-th smallest busy entry frees the last one needed.
-      std::vector<Cycle> busy;
-      for (Cycle c : miss_queue_)
-        if (c > now) busy.push_back(c);
-      std::nth_element(busy.begin(), busy.begin() + (misses - free - 1), busy.end());
-      miss_queue_min_ = busy[misses - free - 1];
+    Cycle earliest = kNever;
+    for (Cycle c : miss_queue_)
+      if (c > now) {
+        ++busy;
+        earliest = std::min(earliest, c);
+      }
+    if (cfg_.miss_queue - busy < misses) {
+      // Exact: the (misses - free)-th smallest busy entry frees the last one
+      // needed (one missing line, the usual case: the earliest).
+      const uint32_t k = misses - (cfg_.miss_queue - busy);
+      if (k == 1) {
+        miss_queue_min_ = earliest;
+      } else {
+        scratch_busy_.clear();
+        for (Cycle c : miss_queue_)
+          if (c > now) scratch_busy_.push_back(c);
+        std::nth_element(scratch_busy_.begin(), scratch_busy_.begin() + (k - 1), scratch_busy_.end());
+        miss_queue_min_ = scratch_busy_[k - 1];
+      }
       refused_by_set_ = false;
       ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
       return kNever;
@@ -173,6 +185,7 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
   const Cycle hit_ready = now + cfg_.hit_latency;
   Cycle ready = hit_ready;
   uint32_t slot = 0;  // miss-queue search position
+  uint32_t mine = 0;  // this access's misses still in flight at `now`
   for (size_t i = 0; i < lines.size(); ++i) {
     const LineTouch& t = lines[i];
     const bool absent = (scratch_index_[i] & 0x80000000u) != 0;
@@ -185,7 +198,7 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     }
     ++stats_.accesses;
     ++stats_.misses;
-    stats_.read_bytes += uint64_t(std::popcount(t.fill)) * geo_.sector_bytes;
+    stats_.read_bytes += uint64_t(sectorCount(t.fill)) * geo_.sector_bytes;
     if (classify_) classifyAccess(ll, t.fill | t.dirty, true);
     Cycle line_ready = hit_ready;
     if (absent) {
@@ -233,18 +246,21 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
       line.dirty |= t.dirty;
       written_[ll] |= t.dirty;
       tile_touched_[tile] = 1;
-      stats_.write_bytes += uint64_t(std::popcount(t.dirty)) * geo_.sector_bytes;
+      stats_.write_bytes += uint64_t(sectorCount(t.dirty)) * geo_.sector_bytes;
     }
     line.stamp = ++stamp_;
     line.ready = std::max(line.ready, line_ready);
     ready = std::max(ready, line.ready);
     // Its miss-queue entry: busy until the line is there.
+    mine += line.ready > now;
     while (miss_queue_[slot] > now) ++slot;
     miss_queue_[slot] = line.ready;
     miss_queue_max_ = std::max(miss_queue_max_, line.ready);
   }
-  if (misses != 0)
-    stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, missesInFlight(now));
+  if (misses != 0) {
+    // The entries busy before plus this access's misses whose line is not there yet.
+    stats_.peak_misses_in_flight = std::max(stats_.peak_misses_in_flight, std::min(busy + mine, cfg_.miss_queue));
+  }
   if (!pin)
     for (uint32_t index : scratch_index_) --lines_[index & 0x7FFFFFFFu].pins;
   return ready;

@@ -173,7 +173,7 @@ class BlendArrayCache {
   Cycle hit(Line& line, Cycle now, uint32_t ll, const LineTouch& t) {  // a resident line with its sectors, but the pin
     ++stats_.accesses;
     ++stats_.hits;
-    stats_.read_bytes += uint64_t(__builtin_popcount(t.fill)) * geo_.sector_bytes;
+    stats_.read_bytes += uint64_t(sectorCount(t.fill)) * geo_.sector_bytes;
     if (classify_) classifyAccess(ll, t.fill | t.dirty, false);
     line.stamp = ++stamp_;
     if (t.dirty) {
@@ -181,7 +181,7 @@ class BlendArrayCache {
       line.valid |= t.dirty;
       written_[ll] |= t.dirty;
       tile_touched_[line.tile] = 1;
-      stats_.write_bytes += uint64_t(__builtin_popcount(t.dirty)) * geo_.sector_bytes;
+      stats_.write_bytes += uint64_t(sectorCount(t.dirty)) * geo_.sector_bytes;
     }
     const Cycle hit_ready = now + cfg_.hit_latency;
     if (line.ready > hit_ready) {
@@ -219,6 +219,7 @@ class BlendArrayCache {
   uint32_t fa_head_ = kInvalid, fa_tail_ = kInvalid, fa_size_ = 0;
   // Scratch of acquireSlow (no allocation per call).
   std::vector<uint32_t> scratch_index_;
+  std::vector<Cycle> scratch_busy_;
   CacheStats stats_;
 };
 

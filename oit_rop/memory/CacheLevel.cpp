@@ -72,19 +72,14 @@ class LineTable {
   size_t mask_ = 0, size_ = 0;
 };
 
-// Bank-hash-like fold: the line number's slice-sized digits combined, so a
-// sequential stream walks every slice and far-apart regions spread.
-unsigned foldDigits(uint64_t line, unsigned slices) {
+// The slice of a line: its number plus (XOR for a power of two) its bits
+// from 12, 24 and 36 up, mod the slices: a sequential stream (fixed high
+// bits) walks every slice in turn, and regions far apart (the surfaces, the
+// A-buffer's node pools 2^36 bytes apart) start at different slices.
+unsigned sliceHash(uint64_t line, unsigned slices) {
   if (slices <= 1) return 0;
-  if ((slices & (slices - 1)) == 0) {
-    const unsigned shift = unsigned(std::countr_zero(slices));
-    uint64_t h = 0;
-    for (uint64_t r = line; r != 0; r >>= shift) h ^= r & (slices - 1);
-    return unsigned(h);
-  }
-  uint64_t sum = 0;
-  for (uint64_t r = line; r != 0; r /= slices) sum += r % slices;
-  return unsigned(sum % slices);
+  if ((slices & (slices - 1)) == 0) return unsigned((line ^ (line >> 12) ^ (line >> 24) ^ (line >> 36)) & (slices - 1));
+  return unsigned((line + (line >> 12) + (line >> 24) + (line >> 36)) % slices);
 }
 
 }  // namespace
@@ -175,6 +170,10 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, double co
                                             "line = {})",
                                             name_, cfg.size_bytes, per_set));
   sets_ = uint32_t(cfg.size_bytes / per_set);
+  if ((cfg.line_bytes & (cfg.line_bytes - 1)) != 0) throw std::invalid_argument(name_ + ": line_bytes must be a power of two");
+  line_shift_ = unsigned(std::countr_zero(cfg.line_bytes));
+  slice_shift_ = (cfg.slices & (cfg.slices - 1)) == 0 ? int(std::countr_zero(cfg.slices)) : -1;
+  sets_pow2_ = (sets_ & (sets_ - 1)) == 0;
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
   // Ticks per byte, x 2^16 for precision: 2^32 / bytes_per_clock.
@@ -188,24 +187,29 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, double co
 
 CacheLevel::~CacheLevel() = default;
 
-unsigned CacheLevel::sliceOf(uint64_t addr) const { return foldDigits(addr / cfg_.line_bytes, cfg_.slices); }
-uint32_t CacheLevel::setOf(uint64_t addr) const { return uint32_t(addr / cfg_.line_bytes / cfg_.slices % sets_); }
+unsigned CacheLevel::sliceOf(uint64_t addr) const { return sliceHash(addr >> line_shift_, cfg_.slices); }
+uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_shift_); }
 
-CacheLevel::Line* CacheLevel::setOfLine(uint64_t line) {
-  const uint64_t addr = line * cfg_.line_bytes;
-  const size_t set = size_t(sliceOf(addr)) * sets_ + setOf(addr);
-  return &lines_[set * cfg_.ways];
+uint32_t CacheLevel::setIndex(uint64_t line) const {
+  const uint64_t in_slice = slice_shift_ >= 0 ? line >> slice_shift_ : line / cfg_.slices;
+  return uint32_t(sets_pow2_ ? in_slice & (sets_ - 1) : in_slice % sets_);
 }
 
-CacheLevel::Line* CacheLevel::find(uint64_t line) {
-  Line* set = setOfLine(line);
+CacheLevel::Line* CacheLevel::setOfLine(uint64_t line, unsigned& slice) {
+  slice = sliceHash(line, cfg_.slices);
+  return &lines_[(size_t(slice) * sets_ + setIndex(line)) * cfg_.ways];
+}
+
+CacheLevel::Line* CacheLevel::find(Line* set, uint64_t line) {
   for (unsigned w = 0; w < cfg_.ways; ++w)
     if (set[w].tag1 == line + 1) return &set[w];
   return nullptr;
 }
 
 bool CacheLevel::resident(uint64_t addr) const {
-  return const_cast<CacheLevel*>(this)->find(addr / cfg_.line_bytes) != nullptr;
+  CacheLevel& self = const_cast<CacheLevel&>(*this);
+  unsigned slice;
+  return self.find(self.setOfLine(addr >> line_shift_, slice), addr >> line_shift_) != nullptr;
 }
 
 void CacheLevel::evict(Cycle now, Line& l) {
@@ -215,7 +219,7 @@ void CacheLevel::evict(Cycle now, Line& l) {
   if (victim_sink_) {
     // A victim level below takes every eviction, clean or dirty.
     ++stats_.writebacks[si];
-    stats_.writeback_bytes[si] += uint64_t(std::popcount(l.valid)) * sector_bytes_;
+    stats_.writeback_bytes[si] += uint64_t(sectorCount(l.valid)) * sector_bytes_;
     victim_sink_->insertVictim(now, addr, cfg_.line_bytes, sector_bytes_, l.valid, l.dirty, l.surface);
   } else if (l.dirty) {
     ++stats_.writebacks[si];
@@ -228,8 +232,7 @@ void CacheLevel::evict(Cycle now, Line& l) {
   l = Line{};
 }
 
-CacheLevel::Line& CacheLevel::allocate(Cycle now, uint64_t line) {
-  Line* set = setOfLine(line);
+CacheLevel::Line& CacheLevel::allocate(Cycle now, Line* set, uint64_t line) {
   const size_t set_no = size_t(set - lines_.get()) / cfg_.ways;
   set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
   Line* victim = &set[0];
@@ -288,17 +291,19 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
   const unsigned si = unsigned(s);
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   Cycle done = now;
-  const uint64_t first = addr / cfg_.line_bytes, last = (addr + bytes - 1) / cfg_.line_bytes;
+  const uint64_t first = addr >> line_shift_, last = (addr + bytes - 1) >> line_shift_;
   for (uint64_t line = first; line <= last; ++line) {
     const uint64_t line_addr = line * cfg_.line_bytes;
     const uint64_t b = std::max(addr, line_addr), e = std::min(addr + bytes, line_addr + cfg_.line_bytes);
     uint32_t any, whole;
     sectorsOf(line_addr, addr, bytes, any, whole);
+    unsigned slice;
+    Line* const set = setOfLine(line, slice);
     Cycle moved;
-    const Cycle start = bookPort(sliceOf(line_addr), now, uint32_t(e - b), moved);
+    const Cycle start = bookPort(slice, now, uint32_t(e - b), moved);
     const Cycle after_lookup = start + cfg_.hit_latency;
     ++stats_.accesses[si];
-    Line* l = find(line);
+    Line* l = find(set, line);
     if (!write) {
       const uint32_t missing = l ? any & ~l->valid : any;
       classify(line, any, missing != 0);
@@ -315,7 +320,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       done = std::max({done, after_lookup, moved, got});
       if (!l && cfg_.victim_only) continue;
       if (!l) {
-        l = &allocate(start, line);
+        l = &allocate(start, set, line);
         l->surface = s;
       }
       l->valid |= missing;
@@ -337,7 +342,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       stats_.writeback_bytes[si] += e - b;
       continue;
     }
-    if (!l) l = &allocate(start, line);
+    if (!l) l = &allocate(start, set, line);
     const uint32_t partial = any & ~whole & ~l->valid;
     if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
     l->valid |= any;
@@ -357,13 +362,15 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     if (!(valid >> k & 1)) continue;
     const uint64_t a = addr + uint64_t(k) * sector_bytes;
     const bool is_dirty = (dirty >> k & 1) != 0;
-    const uint64_t line = a / cfg_.line_bytes, line_addr = line * cfg_.line_bytes;
+    const uint64_t line = a >> line_shift_, line_addr = line << line_shift_;
     uint32_t any, whole;
     sectorsOf(line_addr, a, sector_bytes, any, whole);
+    unsigned slice;
+    Line* const set = setOfLine(line, slice);
     Cycle moved;
-    const Cycle start = bookPort(sliceOf(line_addr), now, sector_bytes, moved);
+    const Cycle start = bookPort(slice, now, sector_bytes, moved);
     stats_.write_bytes[si] += sector_bytes;
-    Line* l = find(line);
+    Line* l = find(set, line);
     if (!l) {
       if (whole == 0) {
         // Covers no whole sector of ours: dirty bytes go on below, clean ones are dropped.
@@ -373,7 +380,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
         }
         continue;
       }
-      l = &allocate(start, line);
+      l = &allocate(start, set, line);
       l->surface = s;
     }
     classes_.install(line, whole);

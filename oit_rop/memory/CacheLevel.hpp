@@ -108,11 +108,12 @@ class CacheLevel final : public MemoryPort {
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
-  Line* setOfLine(uint64_t line);  // the ways of the line's set (marked used)
+  uint32_t setIndex(uint64_t line) const;          // the line's set inside its slice
+  Line* setOfLine(uint64_t line, unsigned& slice);  // the ways of the line's set, and its slice
   // The way holding `line` in its set, or null.
-  Line* find(uint64_t line);
+  Line* find(Line* set, uint64_t line);
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
-  Line& allocate(Cycle now, uint64_t line);
+  Line& allocate(Cycle now, Line* set, uint64_t line);
   void evict(Cycle now, Line& l);
   // Port booking: the slice's port moves `bytes` from `now` on, queued behind
   // earlier bookings (no back-filling, as the DRAM bus); returns the cycle the
@@ -132,6 +133,9 @@ class CacheLevel final : public MemoryPort {
   MemoryPort& lower_;
   CacheLevel* victim_sink_;
   uint32_t sector_bytes_, all_sectors_, sets_;
+  unsigned line_shift_ = 0;  // log2(line_bytes)
+  int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
+  bool sets_pow2_ = false;
   uint64_t ticks_per_byte_num_;  // port: 2^16 / bytes_per_clock, as a fraction of 2^16 (ticks per 2^16 bytes)
   std::unique_ptr<Line[], FreeDeleter> lines_;  // slice-major: (slice x sets + set) x ways + way; calloc'd
   size_t line_count_ = 0;

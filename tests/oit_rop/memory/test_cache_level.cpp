@@ -81,9 +81,9 @@ TEST(CacheLevel, SlicesServeInParallel) {
   FakeBelow below;
   CacheLevel l2("l2", small(4 * 4096, 4, 64, 4), 1000, below);
   for (uint64_t a = 0; a < 1024; a += 64) l2.access(0, a, 64, false, Surface::BlendArrays);
-  // Consecutive lines walk the 4 slices (the fold of a line number's 2-bit
-  // digits is a bijection of its lowest digit): 4 lines per slice, the last
-  // transfer of each starts at t0 + 12, data at t0 + 32.
+  // Consecutive lines walk the 4 slices (lines 0..15: no bits from 12 up, so
+  // slice = line mod 4): 4 lines per slice, the last transfer of each starts
+  // at t0 + 12, data at t0 + 32.
   std::vector<unsigned> per_slice(4, 0);
   for (uint64_t a = 0; a < 1024; a += 64) ++per_slice[l2.sliceOf(a)];
   EXPECT_EQ(per_slice, (std::vector<unsigned>{4, 4, 4, 4}));
