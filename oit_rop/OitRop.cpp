@@ -16,13 +16,16 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
   // The shared levels, from the DRAM up: l3 behind l2 (a victim l3 gets the
   // l2's evictions), the first of them the partitions' entry.
   const RopConfig& c = *setup.cfg;
+  // Partitions run up to a quantum apart; a level's later requests (an l2 miss
+  // after its lookup) a little further: the ports keep twice that and more.
+  const Cycle lookback = 2 * std::max<Cycle>(1, c.sim.quantum_cycles) + 4096;
   MemoryPort* below = &dram_.entry();
   if (c.l2.size_bytes != 0) {
     if (c.l3.size_bytes != 0) {
-      l3_ = std::make_unique<CacheLevel>("l3", c.l3, c.clock.core_mhz, *below);
+      l3_ = std::make_unique<CacheLevel>("l3", c.l3, lookback, *below);
       below = l3_.get();
     }
-    l2_ = std::make_unique<CacheLevel>("l2", c.l2, c.clock.core_mhz, *below,
+    l2_ = std::make_unique<CacheLevel>("l2", c.l2, lookback, *below,
                                        l3_ && c.l3.victim_only ? l3_.get() : nullptr);
     dram_.setEntry(*l2_);
   }

@@ -150,7 +150,7 @@ void MissClassifier::install(uint64_t line, uint32_t sectors) {
 
 // ---- CacheLevel ---------------------------------------------------------------
 
-CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, double core_mhz, MemoryPort& lower,
+CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle lookback, MemoryPort& lower,
                        CacheLevel* victim_sink)
     : name_(std::move(name)),
       cfg_(cfg),
@@ -158,7 +158,6 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, double co
       victim_sink_(victim_sink),
       sector_bytes_(cfg.sector_bytes ? cfg.sector_bytes : cfg.line_bytes),
       classes_(cfg.line_bytes ? cfg.size_bytes / cfg.line_bytes : 1) {
-  (void)core_mhz;
   if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0 || cfg.slices == 0)
     throw std::invalid_argument(name_ + ": size, line, ways and slices must be > 0");
   if (sector_bytes_ > cfg.line_bytes || cfg.line_bytes % sector_bytes_ != 0 || cfg.line_bytes / sector_bytes_ > 32)
@@ -176,13 +175,11 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, double co
   sets_pow2_ = (sets_ & (sets_ - 1)) == 0;
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
-  // Ticks per byte, x 2^16 for precision: 2^32 / bytes_per_clock.
-  ticks_per_byte_num_ = uint64_t(std::ceil(std::ldexp(1.0, 2 * kTickShift) / cfg.bytes_per_clock));
   line_count_ = size_t(cfg.slices) * sets_ * cfg.ways;
   lines_.reset(static_cast<Line*>(std::calloc(line_count_, sizeof(Line))));
   if (!lines_) throw std::bad_alloc();
   set_used_.assign((size_t(cfg.slices) * sets_ + 63) / 64, 0);
-  port_free_.assign(cfg.slices, 0);
+  ports_.assign(cfg.slices, PortCalendar(cfg.bytes_per_clock, lookback));
 }
 
 CacheLevel::~CacheLevel() = default;
@@ -246,13 +243,6 @@ CacheLevel::Line& CacheLevel::allocate(Cycle now, Line* set, uint64_t line) {
   evict(now, *victim);
   victim->tag1 = line + 1;
   return *victim;
-}
-
-Cycle CacheLevel::bookPort(unsigned slice, Cycle now, uint32_t bytes, Cycle& end) {
-  const uint64_t start = std::max(uint64_t(now) << kTickShift, port_free_[slice]);
-  port_free_[slice] = start + ((uint64_t(bytes) * ticks_per_byte_num_ + 0xFFFF) >> kTickShift);
-  end = Cycle((port_free_[slice] + (uint64_t(1) << kTickShift) - 1) >> kTickShift);
-  return Cycle(start >> kTickShift);  // the transfer starts in this cycle
 }
 
 void CacheLevel::sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {

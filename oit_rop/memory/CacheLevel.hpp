@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "oit_rop/config/RopConfig.hpp"
+#include "oit_rop/memory/PortCalendar.hpp"
 #include "oit_rop/stages/PipelineQueues.hpp"
 #include "oit_rop/Types.hpp"
 
@@ -67,8 +68,9 @@ class CacheLevel final : public MemoryPort {
   // `lower`: the level below (a CacheLevel or the DRAM). `victim_sink`: the
   // level below when it is victim_only (its CacheLevel), which then receives
   // every eviction of this level, clean or dirty; null otherwise (dirty
-  // evictions are written to `lower`).
-  CacheLevel(std::string name, const SharedCacheConfig& cfg, double core_mhz, MemoryPort& lower,
+  // evictions are written to `lower`). `lookback`: how far behind the latest
+  // request another may come (callers a quantum apart: PortCalendar).
+  CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle lookback, MemoryPort& lower,
              CacheLevel* victim_sink = nullptr);
   ~CacheLevel() override;
 
@@ -94,7 +96,6 @@ class CacheLevel final : public MemoryPort {
   bool resident(uint64_t addr) const;  // the line holding addr is in the cache (any sector)
 
  private:
-  static constexpr unsigned kTickShift = 16;  // port time in 2^-16 cycles, as the DRAM's
   // All zero = an invalid line, so the tag store can be allocated zeroed by
   // the system (calloc): the pages of sets never used are never touched (a
   // 128 MB level has 2 M lines; a frame uses a fraction of them).
@@ -115,10 +116,14 @@ class CacheLevel final : public MemoryPort {
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
   Line& allocate(Cycle now, Line* set, uint64_t line);
   void evict(Cycle now, Line& l);
-  // Port booking: the slice's port moves `bytes` from `now` on, queued behind
-  // earlier bookings (no back-filling, as the DRAM bus); returns the cycle the
-  // transfer starts, `end` the cycle it ends (rounded up).
-  Cycle bookPort(unsigned slice, Cycle now, uint32_t bytes, Cycle& end);
+  // Port booking: the slice's port moves `bytes` from `now` on, in the
+  // earliest capacity free (PortCalendar); returns the cycle the transfer
+  // starts, `end` the cycle it is done.
+  Cycle bookPort(unsigned slice, Cycle now, uint32_t bytes, Cycle& end) {
+    Cycle start;
+    ports_[slice].book(now, bytes, start, end);
+    return start;
+  }
   // Sectors of the line holding [addr, addr + bytes) that the range covers at
   // all / covers wholly.
   void sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const;
@@ -136,11 +141,10 @@ class CacheLevel final : public MemoryPort {
   unsigned line_shift_ = 0;  // log2(line_bytes)
   int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
   bool sets_pow2_ = false;
-  uint64_t ticks_per_byte_num_;  // port: 2^16 / bytes_per_clock, as a fraction of 2^16 (ticks per 2^16 bytes)
   std::unique_ptr<Line[], FreeDeleter> lines_;  // slice-major: (slice x sets + set) x ways + way; calloc'd
   size_t line_count_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
-  std::vector<uint64_t> port_free_;  // ticks, per slice
+  std::vector<PortCalendar> ports_;  // per slice
   uint64_t stamp_ = 0;
   MissClassifier classes_;
   LevelStats stats_;
