@@ -61,7 +61,7 @@ void PortCalendar::reserve(Cycle last) {
 void PortCalendar::book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end) {
   if (now > latest_) {
     latest_ = now;
-    if (latest_ > lookback_) advanceBase(latest_ - lookback_);
+    if (lookback_ != 0 && latest_ > lookback_) advanceBase(latest_ - lookback_);
   }
   Cycle c = std::max(now, base_);
   uint64_t need = (uint64_t(bytes) * parts_per_byte_ + 0xFFFF) >> 16;  // parts of a cycle

@@ -13,7 +13,8 @@
 // `lookback` to the furthest booking (it grows when bookings run further
 // ahead); a full-cycle bitmap lets a request skip a backlog 64 cycles at a
 // time. A request older than the ring (more than `lookback` behind the
-// latest) is taken as arriving at the ring's oldest cycle.
+// latest, or before the floor set by retireBefore) is taken as arriving at
+// the ring's oldest cycle. With `lookback` 0 only retireBefore moves the ring.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +32,10 @@ class PortCalendar {
   void book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end);
   // Capacity booked in cycle c, in 2^-16 parts of the cycle (tests).
   uint32_t used(Cycle c) const;
+  // No request will come before cycle c: the ring may drop the cycles before
+  // it (a caller that knows its requests' floor; with lookback 0 the only way
+  // the ring moves on).
+  void retireBefore(Cycle c) { advanceBase(c); }
 
  private:
   static constexpr uint32_t kFull = 1u << 16;  // one cycle of the port
