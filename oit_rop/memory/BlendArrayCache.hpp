@@ -11,6 +11,7 @@
 // bits); it needs no read from below, and the resolve skips untouched tiles.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -42,6 +43,18 @@ struct CacheStats {
   uint64_t compulsory_misses = 0, capacity_misses = 0, conflict_misses = 0;
   double hitRate() const { return accesses ? double(hits) / double(accesses) : 0.0; }
   bool operator==(const CacheStats&) const = default;
+  // Adds another partition's counts (the peak: the larger).
+  CacheStats& operator+=(const CacheStats& o) {
+    accesses += o.accesses, hits += o.hits, misses += o.misses, sector_misses += o.sector_misses;
+    clear_fills += o.clear_fills, evictions += o.evictions, writebacks += o.writebacks;
+    miss_queue_full += o.miss_queue_full, set_in_use += o.set_in_use;
+    peak_misses_in_flight = std::max(peak_misses_in_flight, o.peak_misses_in_flight);
+    hits_under_miss += o.hits_under_miss, read_bytes += o.read_bytes, write_bytes += o.write_bytes;
+    fill_bytes += o.fill_bytes, writeback_bytes += o.writeback_bytes;
+    compulsory_misses += o.compulsory_misses, capacity_misses += o.capacity_misses;
+    conflict_misses += o.conflict_misses;
+    return *this;
+  }
 };
 
 // Cache geometry for lines of `line_bytes` (cache.line_bytes): ways =

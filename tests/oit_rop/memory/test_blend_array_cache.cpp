@@ -865,6 +865,21 @@ TEST(BlendArrayCacheLines, MissesAreClassified) {
   EXPECT_EQ(cache.stats().misses, 6u);
 }
 
+TEST(BlendArrayCacheLines, StatsOfPartitionsAddUpAndThePeakIsTheLarger) {
+  CacheStats a, b;
+  a.accesses = 3, a.hits = 1, a.misses = 2, a.conflict_misses = 1, a.fill_bytes = 64, a.peak_misses_in_flight = 5;
+  b.accesses = 4, b.hits = 4, b.hits_under_miss = 2, b.write_bytes = 32, b.peak_misses_in_flight = 2;
+  a += b;
+  EXPECT_EQ(a.accesses, 7u);
+  EXPECT_EQ(a.hits, 5u);
+  EXPECT_EQ(a.misses, 2u);
+  EXPECT_EQ(a.conflict_misses, 1u);
+  EXPECT_EQ(a.hits_under_miss, 2u);
+  EXPECT_EQ(a.fill_bytes, 64u);
+  EXPECT_EQ(a.write_bytes, 32u);
+  EXPECT_EQ(a.peak_misses_in_flight, 5u);
+}
+
 TEST(BlendArrayCacheLines, DirtyRangesAtTheEndAreTheDirtySectors) {
   Recorder below;
   BlendArrayCache cache(sectoredCache(8, 2), kSectored, 16, 1 << 20, below, true);
