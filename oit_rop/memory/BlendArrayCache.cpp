@@ -66,6 +66,7 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, const TileLines& lines,
     fa_next_.assign(line_of_.size(), kInvalid);
     seen_.assign(line_of_.size(), 0);
     fa_in_.assign(line_of_.size(), 0);
+    fa_valid_.assign(line_of_.size(), 0);
   }
   // (A fragment asks for every line it touches at once: one per line at most.)
   scratch_index_.reserve(64);
@@ -77,9 +78,13 @@ BlendArrayCache::~BlendArrayCache() = default;
 void BlendArrayCache::classifyAccess(uint32_t ll, uint32_t sectors, bool missed) {
   const bool fresh = (sectors & ~seen_[ll]) != 0;
   seen_[ll] |= sectors;
-  const bool fa_hit = fa_in_[ll] != 0;
+  // The fully associative cache holds ll's sectors fa_valid_[ll] while
+  // fa_in_[ll]; it hits when it holds every sector the access needs.
+  const bool fa_present = fa_in_[ll] != 0;
+  const bool fa_hit = fa_present && (sectors & ~fa_valid_[ll]) == 0;
+  fa_valid_[ll] = (fa_present ? fa_valid_[ll] : 0) | sectors;
   // Move (or put) ll at the front of the fully associative LRU list.
-  if (fa_hit) {
+  if (fa_present) {
     if (fa_head_ != ll) {
       const uint32_t p = fa_prev_[ll], n = fa_next_[ll];
       fa_next_[p] = n;

@@ -225,9 +225,10 @@ class BlendArrayCache {
   uint64_t stamp_ = 0;
   bool refused_by_set_ = false;
   uint32_t refused_set_ = 0;  // set of the last acquire refused by its set
-  // Miss classes: a fully associative LRU list over the line numbers and the
-  // sectors each line ever held (only with classify_).
-  std::vector<uint32_t> fa_prev_, fa_next_, seen_;
+  // Miss classes: a fully associative LRU list over the line numbers, the
+  // sectors it holds of each line in it (fa_valid_) and the sectors each line
+  // ever held (seen_) (only with classify_).
+  std::vector<uint32_t> fa_prev_, fa_next_, fa_valid_, seen_;
   std::vector<uint8_t> fa_in_;
   uint32_t fa_head_ = kInvalid, fa_tail_ = kInvalid, fa_size_ = 0;
   // Scratch of acquireSlow (no allocation per call).

@@ -92,6 +92,7 @@ struct MissClassifier::Impl {
   LineTable seen;     // line -> sectors ever held
   std::vector<uint64_t> key;
   std::vector<uint32_t> prev, next;
+  std::vector<uint32_t> valid;  // per slot: the sectors the fully associative cache holds of its line
   uint32_t head = kNone, tail = kNone, used = 0;
   static constexpr uint32_t kNone = ~0u;
 
@@ -105,13 +106,16 @@ struct MissClassifier::Impl {
     (head == kNone ? tail : prev[head]) = s;
     head = s;
   }
-  // Touches `line` in the fully associative LRU; true when it was there.
-  bool touch(uint64_t line) {
+  // Touches `line`'s `sectors` in the fully associative LRU (it fills the
+  // sectors it lacked, as the real cache does); true when it held them all.
+  bool touch(uint64_t line, uint32_t sectors) {
     if (uint32_t* s = slot_of.find(line)) {
       const uint32_t slot = *s;
       unlink(slot);
       pushFront(slot);
-      return true;
+      const bool held = (sectors & ~valid[slot]) == 0;
+      valid[slot] |= sectors;
+      return held;
     }
     uint32_t slot;
     if (used < capacity) {
@@ -119,6 +123,7 @@ struct MissClassifier::Impl {
       key.push_back(line);
       prev.push_back(kNone);
       next.push_back(kNone);
+      valid.push_back(0);
     } else {
       slot = tail;
       unlink(slot);
@@ -126,6 +131,7 @@ struct MissClassifier::Impl {
       key[slot] = line;
     }
     slot_of[line] = slot;
+    valid[slot] = sectors;
     pushFront(slot);
     return false;
   }
@@ -138,14 +144,14 @@ MissClassifier::Kind MissClassifier::access(uint64_t line, uint32_t sectors) {
   uint32_t& seen = impl_->seen[line];
   const bool fresh = (sectors & ~seen) != 0;
   seen |= sectors;
-  const bool fa_hit = impl_->touch(line);
+  const bool fa_hit = impl_->touch(line, sectors);
   if (fresh) return Kind::Compulsory;
   return fa_hit ? Kind::Conflict : Kind::Capacity;
 }
 
 void MissClassifier::install(uint64_t line, uint32_t sectors) {
   impl_->seen[line] |= sectors;
-  impl_->touch(line);
+  impl_->touch(line, sectors);
 }
 
 // ---- CacheLevel ---------------------------------------------------------------

@@ -865,6 +865,33 @@ TEST(BlendArrayCacheLines, MissesAreClassified) {
   EXPECT_EQ(cache.stats().misses, 6u);
 }
 
+TEST(BlendArrayCacheLines, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
+  Recorder below;
+  // 2 lines direct mapped (2 sets of 1 way), lines of 4 sectors, one line per tile.
+  BlendArrayCache cache(sectoredCache(2, 1), TileLines{128, 32, 1}, 8, 0, below, false, {}, /*classify=*/true);
+  Cycle now = 0;
+  const auto touch = [&](uint32_t tile, uint32_t sectors) {
+    const LineTouch r{0, sectors, 0};
+    ASSERT_NE(cache.acquire(now += 100, tile, std::span(&r, 1)), kNever);
+    cache.release(tile, std::span(&r, 1));
+  };
+  touch(0, 0b01);  // compulsory
+  touch(1, 0b01);  // compulsory (set 1)
+  touch(2, 0b01);  // compulsory: evicts tile 0 from set 0, and from the 2-line fully associative cache
+  touch(0, 0b10);  // compulsory (sector 1 never held)
+  // Tile 0 is back with sector 1 only, in both caches: sector 0 misses in
+  // both (capacity), though the fully associative cache holds the line.
+  touch(0, 0b01);
+  EXPECT_EQ(cache.stats().compulsory_misses, 4u);
+  EXPECT_EQ(cache.stats().capacity_misses, 1u);
+  EXPECT_EQ(cache.stats().conflict_misses, 0u);
+  // Tile 2 (sector 0) was evicted from set 0 but the fully associative cache
+  // still holds it: a conflict.
+  touch(2, 0b01);
+  EXPECT_EQ(cache.stats().conflict_misses, 1u);
+  EXPECT_EQ(cache.stats().misses, 6u);
+}
+
 TEST(BlendArrayCacheLines, StatsOfPartitionsAddUpAndThePeakIsTheLarger) {
   CacheStats a, b;
   a.accesses = 3, a.hits = 1, a.misses = 2, a.conflict_misses = 1, a.fill_bytes = 64, a.peak_misses_in_flight = 5;

@@ -64,33 +64,36 @@ TEST(CacheLevel, MissThenHitLatency) {
   EXPECT_EQ(l2.access(301, 64, 64, false, Surface::Depth), 420u);
 }
 
+namespace {
+// Lines 0..15 read at cycle 0 (warm), then all read again at t0: when the
+// last of these 16 hits is there.
+Cycle lastOfSixteenHits(CacheLevel& l2, Cycle t0) {
+  for (uint64_t a = 0; a < 1024; a += 64) l2.access(0, a, 64, false, Surface::BlendArrays);
+  Cycle last = 0;
+  for (uint64_t a = 0; a < 1024; a += 64) last = std::max(last, l2.access(t0, a, 64, false, Surface::BlendArrays));
+  return last;
+}
+}  // namespace
+
 TEST(CacheLevel, OneSlicePortMovesBytesPerClock) {
   FakeBelow below;
   CacheLevel l2("l2", small(4096, 4), 1000, below);
-  for (uint64_t a = 0; a < 1024; a += 64) l2.access(0, a, 64, false, Surface::BlendArrays);  // warm: 16 lines
-  const Cycle t0 = 10000;
   // 16 hits of 64 B requested at t0 on one 16 B/clock port: transfers start
   // at t0, t0 + 4, ..., t0 + 60; the last is there at t0 + 60 + 20 = t0 + 80,
   // i.e. 1024 B / 16 B per clock + the hit latency - one transfer (4).
-  Cycle last = 0;
-  for (uint64_t a = 0; a < 1024; a += 64) last = std::max(last, l2.access(t0, a, 64, false, Surface::BlendArrays));
-  EXPECT_EQ(last, t0 + 80);
+  EXPECT_EQ(lastOfSixteenHits(l2, 10000), 10000u + 80);
 }
 
 TEST(CacheLevel, SlicesServeInParallel) {
   FakeBelow below;
   CacheLevel l2("l2", small(4 * 4096, 4, 64, 4), 1000, below);
-  for (uint64_t a = 0; a < 1024; a += 64) l2.access(0, a, 64, false, Surface::BlendArrays);
   // Consecutive lines walk the 4 slices (lines 0..15: no bits from 12 up, so
   // slice = line mod 4): 4 lines per slice, the last transfer of each starts
   // at t0 + 12, data at t0 + 32.
   std::vector<unsigned> per_slice(4, 0);
   for (uint64_t a = 0; a < 1024; a += 64) ++per_slice[l2.sliceOf(a)];
   EXPECT_EQ(per_slice, (std::vector<unsigned>{4, 4, 4, 4}));
-  const Cycle t0 = 10000;
-  Cycle last = 0;
-  for (uint64_t a = 0; a < 1024; a += 64) last = std::max(last, l2.access(t0, a, 64, false, Surface::BlendArrays));
-  EXPECT_EQ(last, t0 + 32);
+  EXPECT_EQ(lastOfSixteenHits(l2, 10000), 10000u + 32);
 }
 
 TEST(CacheLevel, LeastRecentlyUsedDirtyVictimIsWrittenBack) {
@@ -181,6 +184,28 @@ TEST(CacheLevel, MissesAreClassifiedCompulsoryCapacityConflict) {
   EXPECT_EQ(l2.stats().compulsory_misses, 4u);
   EXPECT_EQ(l2.stats().capacity_misses, 1u);
   EXPECT_EQ(l2.stats().misses[0], 6u);
+}
+
+TEST(CacheLevel, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
+  FakeBelow below;
+  // Two sets of one way, 64-byte lines of 16-byte sectors: lines 0 and 2 share set 0.
+  SharedCacheConfig c = small(128, 1);
+  c.sector_bytes = 16;
+  CacheLevel l2("l2", c, 1000, below);
+  Cycle t = 0;
+  const auto read = [&](uint64_t line, uint32_t sector) {
+    l2.access(t += 200, line * 64 + sector * 16, 16, false, Surface::BlendArrays);
+  };
+  read(0, 0);  // compulsory
+  read(1, 0);  // compulsory
+  read(2, 0);  // compulsory; evicts 0 in both caches (the fully associative one's LRU is 0)
+  read(0, 1);  // compulsory (sector 1 never held); 0 is back with sector 1 in both
+  read(0, 0);  // capacity: neither holds sector 0 of line 0
+  EXPECT_EQ(l2.stats().compulsory_misses, 4u);
+  EXPECT_EQ(l2.stats().capacity_misses, 1u);
+  EXPECT_EQ(l2.stats().conflict_misses, 0u);
+  read(2, 0);  // conflict: evicted from set 0, still in the fully associative cache
+  EXPECT_EQ(l2.stats().conflict_misses, 1u);
 }
 
 TEST(CacheLevel, RejectsBadGeometry) {
