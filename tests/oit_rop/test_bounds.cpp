@@ -17,17 +17,10 @@ using namespace oit::rop::testutil;
 
 namespace {
 
-// `layers` fragments per pixel over a w x h frame, layer by layer, raster
-// order within a layer, each layer nearer than the last (depth 1 - layer / 1024).
+// `layers` fragments per pixel over a w x h frame (RopTestUtil.hpp), each
+// layer nearer than the last by 1/1024.
 std::vector<Fragment> layersOf(uint16_t w, uint16_t h, unsigned layers) {
-  std::vector<Fragment> fs;
-  uint32_t prim = 0;
-  for (unsigned l = 0; l < layers; ++l)
-    for (uint16_t y = 0; y < h; ++y)
-      for (uint16_t x = 0; x < w; ++x)
-        fs.push_back(model::testutil::frag(x, y, 1.0f - float(l + 1) / 1024.0f, 0.5f, 0.25f, 0.125f, 0.25f,
-                                           model::testutil::kTranspDraw, prim++));
-  return fs;
+  return layerSweeps(w, h, layers, 1.0f / 1024.0f);
 }
 
 // One partition, no shared levels, fixed shader latency: every cost below is

@@ -49,23 +49,12 @@ std::vector<Fragment> particles(uint32_t w, uint32_t h, unsigned quads, uint32_t
   return fs;
 }
 
-// Layers swept over the frame in raster order (a streaming, bandwidth-bound scene).
-std::vector<Fragment> sweeps(uint32_t w, uint32_t h, unsigned layers) {
-  std::vector<Fragment> fs;
-  uint32_t prim = 0;
-  for (unsigned l = 0; l < layers; ++l)
-    for (uint32_t y = 0; y < h; ++y)
-      for (uint32_t x = 0; x < w; ++x)
-        fs.push_back(model::testutil::frag(uint16_t(x), uint16_t(y), 1.0f - float(l + 1) / 64.0f, 0.5f, 0.5f, 0.5f,
-                                           0.3f, model::testutil::kTranspDraw, prim++));
-  return fs;
-}
 
 const std::vector<Scene>& scenes() {
   static const std::vector<Scene> s = {
       {"particles_over_wall", 96, 64, particles(96, 64, 600, 21, true)},  // depth reads, culled fragments
       {"particles", 96, 64, particles(96, 64, 600, 5)},
-      {"sweeps", 64, 64, sweeps(64, 64, 6)},
+      {"sweeps", 64, 64, layerSweeps(64, 64, 6, 1.0f / 64.0f)},
   };
   return s;
 }
