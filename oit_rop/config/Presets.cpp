@@ -52,7 +52,7 @@ RopConfig titanXMaxwell() {
   c.cache.miss_queue = 32;
   c.cache.hit_latency = 10;
   c.cache.line_bytes = 128;
-  c.cache.sector_bytes = 32;
+  c.cache.sector_bytes = 0;  // whole lines (CONFIG.md: 32 B sectors, one pixel's array each, lose the lines' spatial hits)
   c.alu.blends_per_clock = 16;
   c.l2.size_bytes = 3u << 20;
   c.l2.ways = 16;
