@@ -2,7 +2,7 @@
 // so the tree and the struct cannot drift apart silently (tests/oit_rop/
 // test_config.cpp counts each section's fields against the registry).
 #include "oit_rop/config/ConfigTree.hpp"
-#include "oit_rop/memory/MemorySystem.hpp"
+#include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
 
 #include <fmt/format.h>
@@ -517,7 +517,7 @@ void ConfigTree::validate() const {
   if (c.dram.burst_bytes > c.dram.row_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.row_bytes ({})", c.dram.burst_bytes, c.dram.row_bytes));
   if (c.dram.trefi_ns > 0 && c.clock.core_mhz > 0 && c.dram.channel_gbps > 0 && c.dram.tck_ns > 0) {
-    const std::string problem = MemorySystem::refreshProblem(c.dram, c.clock.core_mhz);
+    const std::string problem = DramTimings::refreshProblem(c.dram, c.clock.core_mhz);
     if (!problem.empty()) errs.push_back(problem);
   }
   if (c.alu.fp32_rate > c.alu.fp16_rate)

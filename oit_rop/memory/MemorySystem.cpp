@@ -12,19 +12,21 @@ namespace oit::rop {
 
 namespace {
 
-// Converts a non-negative amount of core cycles to ticks, rounding up so that a
-// latency or transfer time is never shorter than configured. Values within
-// 1e-9 (relative) of an integer tick count are taken as that integer: 5.75
-// cycles must not become 5.75 cycles + 1 tick through floating-point noise.
-uint64_t cyclesToTicks(double cycles, unsigned shift) {
-  const double t = std::ldexp(cycles, static_cast<int>(shift));
-  const double r = std::round(t);
-  if (std::fabs(t - r) <= 1e-9 * std::max(1.0, r)) return static_cast<uint64_t>(r);
-  return static_cast<uint64_t>(std::ceil(t));
-}
-
 void require(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("DramConfig: ") + what);
+}
+
+// The geometry the address map needs (a burst never straddles a channel or a
+// row), checked before the map is built from it.
+const DramConfig& checkedGeometry(const DramConfig& cfg) {
+  require(cfg.channels >= 1, "channels must be >= 1");
+  require(cfg.banks >= 1, "banks must be >= 1");
+  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
+  require(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
+          "interleave_bytes must be a multiple of burst_bytes");
+  require(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
+          "row_bytes must be a multiple of burst_bytes");
+  return cfg;
 }
 
 }  // namespace
@@ -41,147 +43,29 @@ uint64_t MemoryStats::writeBytes() const {
   return n;
 }
 
-void MemorySystem::Divisor::set(uint64_t v) {
-  d = v;
-  mask = v - 1;
-  shift = -1;
-  if (v != 0 && (v & (v - 1)) == 0) {
-    shift = 0;
-    while ((uint64_t(1) << shift) != v) ++shift;
-  }
-}
-
-MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), core_mhz_(core_mhz) {
-  require(core_mhz > 0, "core_mhz must be > 0");
-  require(cfg.channels >= 1, "channels must be >= 1");
-  require(cfg.banks >= 1, "banks must be >= 1");
-  require(cfg.channel_gbps > 0, "channel_gbps must be > 0");
-  require(cfg.tck_ns > 0, "tck_ns must be > 0");
-  require(cfg.controller_ns >= 0, "controller_ns must be >= 0");
-  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
-  // A burst must stay inside one channel and one row.
-  require(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
-          "interleave_bytes must be a multiple of burst_bytes");
-  require(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
-          "row_bytes must be a multiple of burst_bytes");
-
-  const double cycles_per_ns = core_mhz / 1000.0;
-  ctrl_ticks_ = cyclesToTicks(cfg.controller_ns * cycles_per_ns, kTickShift);
-  cl_ticks_ = cyclesToTicks(cfg.cl * cfg.tck_ns * cycles_per_ns, kTickShift);
-  trcd_ticks_ = cyclesToTicks(cfg.trcd * cfg.tck_ns * cycles_per_ns, kTickShift);
-  trp_ticks_ = cyclesToTicks(cfg.trp * cfg.tck_ns * cycles_per_ns, kTickShift);
-  tras_ticks_ = cyclesToTicks(cfg.tras * cfg.tck_ns * cycles_per_ns, kTickShift);
-  const double burst_cycles = cfg.burst_bytes / bytesPerCyclePerChannel();
-  // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
-  require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
-  burst_ticks_ = cyclesToTicks(burst_cycles, kTickShift);
-  // Closed row: activates of consecutive bursts of one run, after the first two, are this far apart.
-  act_step_ticks_ = std::max(trcd_ticks_ + cl_ticks_ + burst_ticks_, tras_ticks_) + trp_ticks_;
-  require(burst_ticks_ >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
-
-  map_.burst.set(cfg.burst_bytes);
-  map_.interleave.set(cfg.interleave_bytes);
-  map_.channel.set(cfg.channels);
-  map_.row.set(cfg.row_bytes);
-  map_.bank.set(cfg.banks);
-  map_.chunk_bursts.set(cfg.interleave_bytes / cfg.burst_bytes);
-  map_.row_bursts.set(cfg.row_bytes / cfg.burst_bytes);
-  map_.multi_channel = cfg.channels > 1;
-  map_.hash = cfg.bank_hash && cfg.banks > 1;
-  map_.pow2 = map_.burst.shift >= 0 && map_.chunk_bursts.shift >= 0 && map_.channel.shift >= 0 &&
-              map_.row_bursts.shift >= 0 && map_.bank.shift >= 0;
-
-  if (cfg.trefi_ns > 0) {
-    const std::string problem = refreshProblem(cfg, core_mhz);
-    require(problem.empty(), problem.c_str());
-    refresh_period_ = cyclesToTicks(cfg.trefi_ns * cycles_per_ns, kTickShift);
-    refresh_rfc_ = cyclesToTicks(cfg.trfc_ns * cycles_per_ns, kTickShift);
-    for (unsigned c = 0; c < cfg.channels; ++c) refresh_off_.push_back(refresh_period_ * c / cfg.channels);
-  }
+MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
+    : cfg_(checkedGeometry(cfg)), map_(cfg_), t_(cfg_, core_mhz) {
   bus_free_.assign(cfg.channels, 0);
   busy_ticks_.assign(cfg.channels, 0);
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
 }
 
-std::string MemorySystem::refreshProblem(const DramConfig& cfg, double core_mhz) {
-  if (cfg.trefi_ns == 0) return {};
-  if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
-    return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
-  // The longest run of bursts booked as one (open rows: a row, on a bank the
-  // refresh left closed; closed rows: one burst) must fit between two
-  // refreshes: runs are placed whole (MEMORY.md).
-  const double cycles_per_ns = core_mhz / 1000.0;
-  const auto ticks = [&](double ns) { return cyclesToTicks(ns * cycles_per_ns, kTickShift); };
-  const uint64_t cl = ticks(cfg.cl * cfg.tck_ns), trcd = ticks(cfg.trcd * cfg.tck_ns);
-  const uint64_t burst = ticks(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
-  const uint64_t bursts = cfg.burst_bytes ? std::max<uint64_t>(1, cfg.row_bytes / cfg.burst_bytes) : 1;
-  const uint64_t run = cfg.open_row ? trcd + cl + bursts * burst : trcd + cl + burst;
-  const uint64_t period = ticks(cfg.trefi_ns), rfc = ticks(cfg.trfc_ns);
-  if (rfc < period && period - rfc >= run) return {};
-  return fmt::format(
-      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer booked as one, {} "
-      "({:.1f} ns here)",
-      cfg.trefi_ns, cfg.trfc_ns,
-      cfg.open_row ? fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes) : std::string("one burst"),
-      std::ldexp(double(run), -int(kTickShift)) / cycles_per_ns);
-}
+double MemorySystem::bytesPerCyclePerChannel() const { return t_.bytes_per_cycle; }
+double MemorySystem::peakBytesPerCycle() const { return t_.bytes_per_cycle * cfg_.channels; }
 
-double MemorySystem::bytesPerCyclePerChannel() const {
-  // GB/s / (cycles/s): channel_gbps * 1e9 / (core_mhz * 1e6)
-  return cfg_.channel_gbps * 1000.0 / core_mhz_;
-}
-
-double MemorySystem::peakBytesPerCycle() const { return bytesPerCyclePerChannel() * cfg_.channels; }
-
-double MemorySystem::controllerCycles() const { return std::ldexp(double(ctrl_ticks_), -int(kTickShift)); }
-double MemorySystem::clCycles() const { return std::ldexp(double(cl_ticks_), -int(kTickShift)); }
-double MemorySystem::trcdCycles() const { return std::ldexp(double(trcd_ticks_), -int(kTickShift)); }
-double MemorySystem::trpCycles() const { return std::ldexp(double(trp_ticks_), -int(kTickShift)); }
-double MemorySystem::trasCycles() const { return std::ldexp(double(tras_ticks_), -int(kTickShift)); }
-double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_), -int(kTickShift)); }
+double MemorySystem::controllerCycles() const { return DramTimings::cycles(t_.ctrl); }
+double MemorySystem::clCycles() const { return DramTimings::cycles(t_.cl); }
+double MemorySystem::trcdCycles() const { return DramTimings::cycles(t_.trcd); }
+double MemorySystem::trpCycles() const { return DramTimings::cycles(t_.trp); }
+double MemorySystem::trasCycles() const { return DramTimings::cycles(t_.tras); }
+double MemorySystem::burstCycles() const { return DramTimings::cycles(t_.burst); }
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
-// Inline: book() calls it once per run of bursts.
-template <bool Pow2>
-inline void MemorySystem::bankRow(const Divisor& bank, bool hash, uint64_t row_line, unsigned& bank_out,
-                                  uint64_t& row_out) {
-  uint64_t bk = bank.mod<Pow2>(row_line);
-  const uint64_t rw = bank.div<Pow2>(row_line);
-  // Permutation interleaving (dram.bank_hash): the row's bank-sized digit
-  // groups are XORed into the bank (banks a power of two; else their sum is
-  // added, mod banks). For a fixed row the map stays a bijection of the banks,
-  // so a sequential stream still walks all of them, but streams whose
-  // addresses differ only in high bits (one region per partition and
-  // surface) stop meeting in one bank on different rows.
-  if (hash) {
-    if (bank.shift > 0) {
-      for (uint64_t r = rw; r != 0; r >>= bank.shift) bk ^= r & bank.mask;
-    } else {
-      uint64_t sum = bk;
-      for (uint64_t r = rw; r != 0; r = bank.div(r)) sum += bank.mod(r);
-      bk = bank.mod(sum);
-    }
-  }
-  bank_out = static_cast<unsigned>(bk);
-  row_out = rw;
-}
-
-MemorySystem::Location MemorySystem::AddressMap::locate(uint64_t addr) const {
-  // addr = [row | bank | column-high | channel | column-low(interleave)]
-  const uint64_t chunk = interleave.div(addr);
-  const uint64_t local = channel.div(chunk) * interleave.d + interleave.mod(addr);
-  Location loc{static_cast<unsigned>(channel.mod(chunk)), 0, 0};
-  bankRow<false>(bank, hash, row.div(local), loc.bank, loc.row);
-  return loc;
-}
-
-MemorySystem::Location MemorySystem::locate(uint64_t addr) const { return map_.locate(addr); }
-
-unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).channel; }
-unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
-uint64_t MemorySystem::rowOf(uint64_t addr) const { return locate(addr).row; }
+unsigned MemorySystem::channelOf(uint64_t addr) const { return map_.locate(addr).channel; }
+unsigned MemorySystem::bankOf(uint64_t addr) const { return map_.locate(addr).bank; }
+uint64_t MemorySystem::rowOf(uint64_t addr) const { return map_.locate(addr).row; }
 
 void MemorySystem::setSampleInterval(Cycle interval_cycles) {
   sample_interval_ = interval_cycles;
@@ -239,21 +123,22 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   // them; a few scalars every run uses are copied. Copying more (the whole
   // address map and every timing, as before) cost more per call than the
   // reloads: most of it lands on the stack anyway.
-  const Divisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
-  const Divisor &row_div = map_.row_bursts, &bank_div = map_.bank;
-  const bool multi_channel = map_.multi_channel, hash = map_.hash;
+  const DramDivisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
+  const DramDivisor& row_div = map_.row_bursts;
+  const bool multi_channel = map_.multi_channel;
   const bool open_row = cfg_.open_row;
-  const bool closed_refresh = !open_row && refresh_period_ != 0;
+  const uint64_t refresh_period = t_.refresh_period;
+  const bool closed_refresh = !open_row && refresh_period != 0;
   const unsigned banks = cfg_.banks;
-  const uint64_t cl = cl_ticks_, burst = burst_ticks_;
-  const uint64_t &trcd = trcd_ticks_, &trp = trp_ticks_, &tras = tras_ticks_, &act_step = act_step_ticks_;
+  const uint64_t cl = t_.cl, burst = t_.burst;
+  const uint64_t &trcd = t_.trcd, &trp = t_.trp, &tras = t_.tras, &act_step = t_.act_step;
   uint64_t* const bus_free = bus_free_.data();
   uint64_t* const busy_ticks = busy_ticks_.data();
   Cycle* const channel_busy = stats_.channel_busy.data();
   Bank* const bank_state = banks_.data();
   uint64_t hits = 0, misses = 0;
 
-  const uint64_t arrive = (uint64_t(now) << kTickShift) + ctrl_ticks_;
+  const uint64_t arrive = (uint64_t(now) << kTickShift) + t_.ctrl;
   uint64_t done = arrive;
   const uint64_t first = map_.burst.div<Pow2>(addr);
   const uint64_t last = map_.burst.div<Pow2>(addr + bytes - 1);
@@ -295,7 +180,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       const uint64_t n = closed_refresh ? 1 : std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
       uint64_t row;
-      bankRow<Pow2>(bank_div, hash, row_div.div<Pow2>(lb), bank_no, row);
+      map_.bankRow<Pow2>(row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
       Bank& bank = bank_state[size_t(ch) * banks + bank_no];
       // With refresh the run is placed whole between two refreshes: when it
@@ -303,7 +188,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       // left closed (b, a copy, starts from the committed state on every try;
       // without refresh b is the bank itself: one try).
       Bank copy;
-      Bank& b = refresh_period_ ? copy : bank;
+      Bank& b = refresh_period ? copy : bank;
       uint64_t earliest = arrive;   // no command of the run before this
       uint64_t column;              // tick the run's first column command (read or write) issues
       uint64_t act = 0;             // closed row: the first burst's activate
@@ -311,15 +196,15 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       bool refreshed = false;       // a refresh closed the bank's row
       for (unsigned tries = 0;; ++tries) {
         uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
-        if (refresh_period_) {
+        if (refresh_period) {
           if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
           b = bank;
           // A refresh since the row was opened closed it.
           if (open_row && b.open_row != kNoRow) {
-            const uint64_t w = lastRefreshStart(ch, std::max(earliest, b.row_ready));
+            const uint64_t w = t_.lastRefreshStart(ch, std::max(earliest, b.row_ready));
             if (w > b.act) {
               refreshed = true;
-              earliest = std::max(earliest, w + refresh_rfc_);
+              earliest = std::max(earliest, w + t_.refresh_rfc);
             }
           }
           if (refreshed) b.open_row = kNoRow;
@@ -364,13 +249,13 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
           act = act1 + (n - 2) * act_step;  // the run's last activate
           last_xfer = act + trcd + cl;
         }
-        if (!refresh_period_) break;
-        const uint64_t after = refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
+        if (!refresh_period) break;
+        const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
         if (!after) break;
         earliest = after;
         refreshed = true;
       }
-      if (refresh_period_) bank = b;
+      if (refresh_period) bank = b;
       hits += run_hits;
       misses += run_misses;
       const uint64_t end = last_xfer + burst;

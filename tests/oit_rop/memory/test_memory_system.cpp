@@ -11,32 +11,21 @@
 #include <vector>
 
 #include "oit_rop/TestLcg.hpp"
+#include "oit_rop/memory/DramTestConfig.hpp"
 #include "oit_rop/memory/MemorySystem.hpp"
 
 namespace oit::rop {
 namespace {
 
-// 1 core cycle = 1 ns = 1 DRAM clock; 16 GB/s = 16 B/cycle -> a 64 B burst is 4
-// cycles; controller 40, CL = tRCD = tRP = 11 cycles.
-DramConfig roundConfig(unsigned channels) {
-  DramConfig c;
-  c.channels = channels;
-  c.channel_gbps = 16.0;
-  c.tck_ns = 1.0;
-  c.cl = c.trcd = c.trp = 11;
-  c.banks = 8;
-  c.row_bytes = 8192;
-  c.burst_bytes = 64;
-  c.interleave_bytes = 256;
-  c.open_row = true;
-  c.controller_ns = 40.0;
-  c.bank_hash = false;  // the hand-derived expectations use the plain [row | bank | column] map
-  c.tras = 0;           // and no tRAS limit (tRAS has its own tests)
-  return c;
-}
-constexpr double kRoundMhz = 1000.0;
-constexpr Cycle kCtrl = 40, kCl = 11, kTrcd = 11, kTrp = 11, kBurst = 4;
+DramConfig roundConfig(unsigned channels) { return testutil::roundDramConfig(channels); }
+using testutil::kBurst;
+using testutil::kCl;
+using testutil::kCtrl;
+using testutil::kRoundMhz;
+using testutil::kTrcd;
+using testutil::kTrp;
 
+// The accessors give the converted timings (DramTimings has the conversions' tests).
 TEST(MemorySystem, DerivedTimingsOfRoundConfig) {
   MemorySystem m(roundConfig(2), kRoundMhz);
   EXPECT_DOUBLE_EQ(m.bytesPerCyclePerChannel(), 16.0);
@@ -44,39 +33,25 @@ TEST(MemorySystem, DerivedTimingsOfRoundConfig) {
   EXPECT_DOUBLE_EQ(m.controllerCycles(), 40.0);
   EXPECT_DOUBLE_EQ(m.clCycles(), 11.0);
   EXPECT_DOUBLE_EQ(m.burstCycles(), 4.0);
+  EXPECT_EQ(m.channelOf(256), 1u);
+  EXPECT_EQ(m.bankOf(8192 * 2), 1u);  // local 8192: bank 1
+  EXPECT_EQ(m.rowOf(65536 * 2), 1u);
 }
 
-TEST(MemorySystem, IgpuPresetConversions) {
-  // DDR3-1600 at 1150 MHz core: 12.8 GB/s -> 11.13 B/cycle, a 64 B burst 5.75
-  // cycles, 11 tCK of 1.25 ns = 13.75 ns = 15.8125 cycles, 40 ns = 46 cycles.
+TEST(MemorySystem, IgpuPresetClosedBankLatency) {
+  // ceil(46 + 2 * 15.8125 + 5.75) = ceil(83.375) = 84 (DramTimings.IgpuPresetConversions).
   MemorySystem m(DramConfig{}, 1150.0);
-  EXPECT_NEAR(m.bytesPerCyclePerChannel(), 12.8e9 / 1150e6, 1e-12);
-  EXPECT_NEAR(m.peakBytesPerCycle(), 2 * 12.8e9 / 1150e6, 1e-12);
-  EXPECT_DOUBLE_EQ(m.burstCycles(), 5.75);
-  EXPECT_DOUBLE_EQ(m.clCycles(), 15.8125);
-  EXPECT_DOUBLE_EQ(m.controllerCycles(), 46.0);
-  // Closed bank: ceil(46 + 2 * 15.8125 + 5.75) = ceil(83.375) = 84.
   EXPECT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 84u);
 }
 
-// A bandwidth too low for the tick arithmetic is refused as such (a vanishing
-// bandwidth used to overflow to 0 ticks and be reported as "too high"; the
-// configuration's ranges and its burst-time check keep runs far from both ends).
-TEST(MemorySystem, RefusesBandwidthsTheTicksCannotHold) {
-  auto messageOf = [](double gbps, double mhz) {
-    DramConfig c = roundConfig(1);
-    c.channel_gbps = gbps;
-    try {
-      MemorySystem m(c, mhz);
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  EXPECT_NE(messageOf(1e-300, kRoundMhz).find("channel_gbps too low"), std::string::npos) << messageOf(1e-300, kRoundMhz);
-  EXPECT_NE(messageOf(1e-12, kRoundMhz).find("channel_gbps too low"), std::string::npos);
-  EXPECT_EQ(messageOf(0.1, 1.0), "no error");  // the configurable extremes
-  EXPECT_EQ(messageOf(10000, 10000), "no error");
+TEST(MemorySystem, NonPowerOfTwoGeometryBooksEveryBank) {
+  DramConfig c = roundConfig(3);
+  c.banks = 6;
+  MemorySystem m(c, kRoundMhz);
+  // 3 x 48 KiB: one row index across 6 banks on each of 3 channels.
+  m.access(0, 0, 3 * 48 * 1024, false, Surface::Depth);
+  EXPECT_EQ(m.stats().row_misses, 3u * 6u);
+  for (unsigned ch = 0; ch < 3; ++ch) EXPECT_EQ(m.stats().channel_busy[ch], 48u * 1024u / 16u);
 }
 
 TEST(MemorySystem, SingleReadLatencyClosedBankRowHitAndRowMiss) {
@@ -182,24 +157,6 @@ TEST(MemorySystem, RowHitsOfASequentialStreamCountedByHand) {
   EXPECT_EQ(one.stats().row_hits, 2048u - 16u);
 }
 
-TEST(MemorySystem, AddressMapping) {
-  MemorySystem m(roundConfig(4), kRoundMhz);
-  // Channel from the interleave bits.
-  EXPECT_EQ(m.channelOf(0), 0u);
-  EXPECT_EQ(m.channelOf(255), 0u);
-  EXPECT_EQ(m.channelOf(256), 1u);
-  EXPECT_EQ(m.channelOf(3 * 256 + 17), 3u);
-  EXPECT_EQ(m.channelOf(4 * 256), 0u);
-  // Channel-local address 8192 (bank 1) = global chunk 32 * 4 -> 32768.
-  EXPECT_EQ(m.bankOf(32767), 0u);
-  EXPECT_EQ(m.bankOf(32768), 1u);
-  EXPECT_EQ(m.rowOf(32768), 0u);
-  // Local 8 banks * 8 KiB = 64 KiB -> row 1 of bank 0 at global 256 KiB.
-  EXPECT_EQ(m.bankOf(256 * 1024), 0u);
-  EXPECT_EQ(m.rowOf(256 * 1024), 1u);
-  EXPECT_EQ(m.channelOf(256 * 1024), 0u);
-}
-
 // tRAS: a row stays open at least tRAS after its activate. Round config with
 // tRAS = 28: row 0 of bank 0 opens at 40 (controller), its data ends at 66; a
 // conflicting row may start its precharge only at 40 + 28 = 68, not 66.
@@ -229,38 +186,6 @@ TEST(MemorySystem, TrasSpacesTheActivatesOfAClosedRowRun) {
   EXPECT_EQ(none.access(0, 0, 192, false, Surface::BlendArrays), kCtrl + 3 * (kTrcd + kCl + kBurst) + 2 * kTrp);
 }
 
-// dram.bank_hash: for a fixed row the bank map stays a bijection (a stream
-// still walks every bank), and the row's bits move the bank.
-TEST(MemorySystem, BankHashPermutesTheBanksOfEveryRow) {
-  for (unsigned banks : {8u, 6u}) {
-    DramConfig c = roundConfig(1);
-    c.banks = banks;
-    c.bank_hash = true;
-    MemorySystem m(c, kRoundMhz);
-    const uint64_t row_group = uint64_t(banks) * c.row_bytes;  // one row index across the banks
-    for (uint64_t row : {uint64_t(0), uint64_t(1), uint64_t(5), uint64_t(1) << 20, (uint64_t(1) << 27) + 3}) {
-      std::vector<int> seen(banks, 0);
-      for (unsigned b = 0; b < banks; ++b) {
-        const uint64_t addr = row * row_group + uint64_t(b) * c.row_bytes;
-        ASSERT_EQ(m.rowOf(addr), row);
-        ++seen[m.bankOf(addr)];
-      }
-      for (unsigned b = 0; b < banks; ++b) EXPECT_EQ(seen[b], 1) << banks << " banks, row " << row << ", bank " << b;
-    }
-  }
-  // By hand: 8 banks, row 1 -> bank index XOR 1; row 2^20 -> XOR (1 << (20 % 3)) = 4.
-  DramConfig c = roundConfig(1);
-  c.bank_hash = true;
-  MemorySystem m(c, kRoundMhz);
-  EXPECT_EQ(m.bankOf(65536), 1u);
-  EXPECT_EQ(m.bankOf(65536 + 3 * 8192), 2u);
-  EXPECT_EQ(m.bankOf(uint64_t(65536) << 20), 4u);
-  // 6 banks (digit sum): row 7 = digits 1, 1 -> bank index + 2 (mod 6).
-  c.banks = 6;
-  MemorySystem six(c, kRoundMhz);
-  EXPECT_EQ(six.bankOf(7 * 6 * 8192 + 5 * 8192), (5u + 2u) % 6u);
-}
-
 // Two sequential streams a partition region apart (2^36 B) read alternately:
 // with the plain map both sit in bank 0 on different rows and every access
 // reopens a row; hashed, the second stream is in bank 4 and only the two
@@ -279,20 +204,6 @@ TEST(MemorySystem, BankHashKeepsInterleavedStreamsOnTheirOwnRows) {
     EXPECT_EQ(m.stats().row_misses, hash ? 2u : 256u) << (hash ? "hashed" : "plain");
     EXPECT_EQ(m.stats().row_hits, hash ? 254u : 0u) << (hash ? "hashed" : "plain");
   }
-}
-
-TEST(MemorySystem, NonPowerOfTwoGeometryMapsConsistently) {
-  DramConfig c = roundConfig(3);
-  c.banks = 6;
-  MemorySystem m(c, kRoundMhz);
-  EXPECT_EQ(m.channelOf(5 * 256), 2u);
-  // Local 6 * 8 KiB = 48 KiB per row index; global = local * 3.
-  EXPECT_EQ(m.rowOf(3 * 48 * 1024), 1u);
-  EXPECT_EQ(m.bankOf(3 * 48 * 1024), 0u);
-  EXPECT_EQ(m.bankOf(3 * 8 * 1024), 1u);
-  m.access(0, 0, 3 * 48 * 1024, false, Surface::Depth);
-  EXPECT_EQ(m.stats().row_misses, 3u * 6u);
-  for (unsigned ch = 0; ch < 3; ++ch) EXPECT_EQ(m.stats().channel_busy[ch], 48u * 1024u / 16u);
 }
 
 TEST(MemorySystem, InterleaveSpreadsAStreamEvenly) {
@@ -766,35 +677,6 @@ TEST(MemorySystem, ClosedRowBurstsOfOneRequestStraddleARefresh) {
   EXPECT_EQ(m.access(930, 0, 128, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
   EXPECT_EQ(m.stats().row_misses, 2u);
   EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);
-}
-
-TEST(MemorySystem, RefusesRefreshGapsShorterThanARow) {
-  EXPECT_EQ(MemorySystem::refreshProblem(refreshConfig(1), kRoundMhz), "");
-  // The longest run booked as one must fit in tREFI - tRFC. Open rows: a row of
-  // 128 bursts on a closed bank, tRCD + CL + 512 = 534 cycles; closed rows place
-  // one burst at a time: tRCD + CL + 4 = 26.
-  struct Case {
-    bool open_row;
-    unsigned run;
-    const char* what;
-  };
-  for (const Case& k : {Case{true, 534, "a row of 8192 bytes on a closed bank"}, Case{false, 26, "one burst"}}) {
-    DramConfig c = refreshConfig(1);
-    c.open_row = k.open_row;
-    c.trfc_ns = 1000 - k.run;
-    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "") << k.what;
-    c.trfc_ns = 1000 - k.run + 1;
-    EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz),
-              fmt::format("dram.trefi_ns (1000 ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer "
-                          "booked as one, {} ({}.0 ns here)",
-                          1000 - k.run + 1, k.what, k.run));
-    EXPECT_THROW(MemorySystem(c, kRoundMhz), std::invalid_argument);
-  }
-  DramConfig c = refreshConfig(1);
-  c.trfc_ns = 0;
-  EXPECT_NE(MemorySystem::refreshProblem(c, kRoundMhz).find("needs dram.trfc_ns > 0"), std::string::npos);
-  c.trefi_ns = 0;  // no refresh: tRFC is not used
-  EXPECT_EQ(MemorySystem::refreshProblem(c, kRoundMhz), "");
 }
 
 TEST(MemorySystem, RejectsInvalidGeometry) {
