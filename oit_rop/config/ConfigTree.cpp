@@ -206,7 +206,9 @@ const std::vector<Property>& registry() {
               "access granularity (one burst)", true),
       integer("dram.interleave_bytes", &R::dram, &DramConfig::interleave_bytes, 8, 1u << 20, "bytes",
               "consecutive bytes on one channel before the next", true),
-      boolean("dram.open_row", &R::dram, &DramConfig::open_row, "keep rows open: row hits pay CL only"),
+      boolean("dram.open_row", &R::dram, &DramConfig::open_row,
+              "keep rows open: row hits pay CL only; false = closed page: one activate per request's run of "
+              "bursts in a row, auto-precharge after it"),
       boolean("dram.bank_hash", &R::dram, &DramConfig::bank_hash,
               "bank = bank bits XOR every bank-sized group of row bits (permutation interleaving), so "
               "streams in far-apart regions fall in different banks; false = the plain row-bank-column map"),

@@ -40,7 +40,6 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
   require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
   burst = ticks(burst_cycles);
   require(burst >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
-  act_step = std::max(trcd + cl + burst, tras) + trp;
   if (cfg.trefi_ns > 0) {
     const std::string problem = refreshProblem(cfg, core_mhz);
     require(problem.empty(), problem.c_str());
@@ -54,22 +53,21 @@ std::string DramTimings::refreshProblem(const DramConfig& cfg, double core_mhz) 
   if (cfg.trefi_ns == 0) return {};
   if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
     return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
-  // The longest run of bursts booked as one (open rows: a row, on a bank the
-  // refresh left closed; closed rows: one burst) must fit between two
-  // refreshes: runs are placed whole (MEMORY.md).
+  // The longest run of bursts booked as one (a row, on a bank the refresh left
+  // closed, with either page policy) must fit between two refreshes: runs are
+  // placed whole (MEMORY.md).
   const double cycles_per_ns = core_mhz / 1000.0;
   const auto ns = [&](double v) { return ticks(v * cycles_per_ns); };
   const uint64_t cl = ns(cfg.cl * cfg.tck_ns), trcd = ns(cfg.trcd * cfg.tck_ns);
   const uint64_t burst = ns(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
   const uint64_t bursts = cfg.burst_bytes ? std::max<uint64_t>(1, cfg.row_bytes / cfg.burst_bytes) : 1;
-  const uint64_t run = cfg.open_row ? trcd + cl + bursts * burst : trcd + cl + burst;
+  const uint64_t run = trcd + cl + bursts * burst;
   const uint64_t period = ns(cfg.trefi_ns), rfc = ns(cfg.trfc_ns);
   if (rfc < period && period - rfc >= run) return {};
   return fmt::format(
       "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer booked as one, {} "
       "({:.1f} ns here)",
-      cfg.trefi_ns, cfg.trfc_ns,
-      cfg.open_row ? fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes) : std::string("one burst"),
+      cfg.trefi_ns, cfg.trfc_ns, fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes),
       cycles(run) / cycles_per_ns);
 }
 

@@ -31,7 +31,6 @@ struct DramTimings {
 
   double bytes_per_cycle = 0;  // one channel's data bus
   uint64_t ctrl = 0, cl = 0, trcd = 0, trp = 0, tras = 0, burst = 0;
-  uint64_t act_step = 0;  // closed row: max(tRCD + CL + burst, tRAS) + tRP
 
   // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
   // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /

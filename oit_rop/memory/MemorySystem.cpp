@@ -128,10 +128,9 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   const bool multi_channel = map_.multi_channel;
   const bool open_row = cfg_.open_row;
   const uint64_t refresh_period = t_.refresh_period;
-  const bool closed_refresh = !open_row && refresh_period != 0;
   const unsigned banks = cfg_.banks;
   const uint64_t cl = t_.cl, burst = t_.burst;
-  const uint64_t &trcd = t_.trcd, &trp = t_.trp, &tras = t_.tras, &act_step = t_.act_step;
+  const uint64_t &trcd = t_.trcd, &trp = t_.trp, &tras = t_.tras;
   uint64_t* const bus_free = bus_free_.data();
   uint64_t* const busy_ticks = busy_ticks_.data();
   Cycle* const channel_busy = stats_.channel_busy.data();
@@ -149,14 +148,11 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   // state but sums and maxima, so this gives the times of booking burst by
   // burst in address order. Per burst the formulas of MEMORY.md apply; inside
   // a run they reduce to a closed form, which gives the same times:
-  // - open row: the first burst hits or opens the row; the others hit it and
-  //   their column command issues at the same tick (row_ready, >= arrive, does
-  //   not change), so each waits only for the bus, i.e. the previous burst's end;
-  // - closed row: each further burst activates once the previous one's data
-  //   ended and its row was open tRAS, plus tRP (a bank's last_end never
-  //   exceeds its channel's bus_free, so last_end is that data's end); its data
-  //   then starts tRCD + CL later, after the bus is free. From the second burst
-  //   on the bus never delays it, so activates are act_step apart.
+  // the first burst hits or opens the row (closed page: activates it, the
+  // bank being precharged); the others hit it and their column command issues
+  // at the same tick (row_ready, >= arrive, does not change), so each waits
+  // only for the bus, i.e. the previous burst's end. A closed page
+  // auto-precharges after the run's last burst.
   // (Booked per interleave chunk, a 2 KiB line on the presets was 8 runs; now 2.)
   const uint64_t chunk_bursts = chunk_div.d, row_bursts = row_div.d, channels = channel_div.d;
   const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
@@ -174,10 +170,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       hi = channel_div.div<Pow2>(kl) * chunk_bursts + chunk_div.mod<Pow2>(b_last);
     }
     while (lb <= hi) {
-      // (Closed rows with refresh: a run per burst, each with its own activate,
-      // so refreshes fall between bursts; without refresh the closed form of a
-      // run gives the same times.)
-      const uint64_t n = closed_refresh ? 1 : std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
+      const uint64_t n = std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
       uint64_t row;
       map_.bankRow<Pow2>(row_div.div<Pow2>(lb), bank_no, row);
@@ -191,8 +184,8 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       Bank& b = refresh_period ? copy : bank;
       uint64_t earliest = arrive;   // no command of the run before this
       uint64_t column;              // tick the run's first column command (read or write) issues
-      uint64_t act = 0;             // closed row: the first burst's activate
-      uint64_t xfer, last_xfer, second_xfer, run_hits, run_misses;
+      uint64_t act = 0;             // closed page: the run's activate
+      uint64_t xfer, last_xfer, run_hits, run_misses;
       bool refreshed = false;       // a refresh closed the bank's row
       for (unsigned tries = 0;; ++tries) {
         uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
@@ -232,23 +225,16 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
             column = b.row_ready;
           }
         } else {
-          run_hits = 0;
-          run_misses = n;  // every access activates its row
+          // Closed page: the bank was precharged after its last run; the
+          // run's first burst activates the row, the others hit it.
+          run_hits = n - 1;
+          run_misses = 1;
           act = std::max(earliest, b.act_ready);
           column = act + trcd;
           first_cmd = act;
         }
         xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-        last_xfer = xfer;
-        second_xfer = 0;
-        if (open_row) {
-          last_xfer = xfer + (n - 1) * burst;
-        } else if (n > 1) {
-          const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
-          second_xfer = act1 + trcd + cl;
-          act = act1 + (n - 2) * act_step;  // the run's last activate
-          last_xfer = act + trcd + cl;
-        }
+        last_xfer = xfer + (n - 1) * burst;
         if (!refresh_period) break;
         const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
         if (!after) break;
@@ -265,16 +251,13 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
         const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
         if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
           stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
-        } else if (open_row || n == 1) {
-          sampleBursts(xfer, n, burst);
         } else {
-          sampleBursts(xfer, 1, 0);
-          sampleBursts(second_xfer, n - 1, act_step);
+          sampleBursts(xfer, n, burst);
         }
       }
       bank.last_end = std::max(bank.last_end, end);
       if (!open_row) {
-        // Auto-precharge after the data, once the row was open tRAS.
+        // Auto-precharge after the run's data, once the row was open tRAS.
         bank.act = act;
         bank.act_ready = std::max(bank.last_end, act + tras) + trp;
       }

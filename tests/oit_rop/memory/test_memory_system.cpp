@@ -120,25 +120,45 @@ TEST(MemorySystem, BandwidthBoundHoldsForManySmallRequestsOnIgpuPreset) {
   }
 }
 
-TEST(MemorySystem, OpenRowBeatsClosedRowOnASequentialStream) {
-  // 8 KiB, 1 channel: one row of bank 0, 128 bursts.
+// Closed page (dram.open_row = false): one activate per access run (the
+// bursts of one request in one row), auto-precharge after its last burst.
+TEST(MemorySystem, ClosedPageActivatesOncePerRequestRun) {
+  DramConfig open_cfg = roundConfig(1);
+  DramConfig closed_cfg = open_cfg;
+  closed_cfg.open_row = false;
+  // One request of 8 KiB, 1 channel: one row of bank 0, 128 bursts. Both
+  // policies: one activate, then the bus streams 128 bursts.
+  MemorySystem open(open_cfg, kRoundMhz), closed(closed_cfg, kRoundMhz);
+  EXPECT_EQ(open.access(0, 0, 8192, false, Surface::Depth), kCtrl + kTrcd + kCl + 128 * kBurst);  // 582
+  EXPECT_EQ(closed.access(0, 0, 8192, false, Surface::Depth), kCtrl + kTrcd + kCl + 128 * kBurst);
+  EXPECT_EQ(closed.stats().row_hits, 127u);  // the run's later bursts hit the row it opened
+  EXPECT_EQ(closed.stats().row_misses, 1u);
+  // Closed page, a later access to the row just used: precharged after the
+  // run, so tRCD + CL again, never a row hit.
+  EXPECT_EQ(closed.access(100000, 0, 64, false, Surface::Depth), 100000 + kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(closed.stats().row_misses, 2u);
+}
+
+TEST(MemorySystem, OpenRowBeatsClosedPageOnSeparateRequestsToOneRow) {
+  // 128 requests of 64 B to one row of bank 0, all at cycle 0.
   DramConfig open_cfg = roundConfig(1);
   DramConfig closed_cfg = open_cfg;
   closed_cfg.open_row = false;
   MemorySystem open(open_cfg, kRoundMhz), closed(closed_cfg, kRoundMhz);
-  // Open: one activate, then the bus streams 128 bursts.
-  EXPECT_EQ(open.access(0, 0, 8192, false, Surface::Depth), kCtrl + kTrcd + kCl + 128 * kBurst);
-  // Closed: every burst activates bank 0 again after the previous burst's data
-  // and auto-precharge: first burst ends at tRCD+CL+burst, each further one
-  // tRP + tRCD + CL + burst later.
-  EXPECT_EQ(closed.access(0, 0, 8192, false, Surface::Depth),
-            kCtrl + (kTrcd + kCl + kBurst) + 127 * (kTrp + kTrcd + kCl + kBurst));
+  Cycle open_end = 0, closed_end = 0;
+  for (uint64_t i = 0; i < 128; ++i) {
+    open_end = std::max(open_end, open.access(0, i * 64, 64, false, Surface::Depth));
+    closed_end = std::max(closed_end, closed.access(0, i * 64, 64, false, Surface::Depth));
+  }
+  // Open: one activate, then 128 row hits back to back on the bus.
+  EXPECT_EQ(open_end, kCtrl + kTrcd + kCl + 128 * kBurst);
   EXPECT_EQ(open.stats().row_hits, 127u);
-  EXPECT_EQ(open.stats().row_misses, 1u);
+  // Closed: each request activates bank 0 again after the previous one's data
+  // and auto-precharge: the first ends at tRCD + CL + burst, each further one
+  // tRP + tRCD + CL + burst later.
+  EXPECT_EQ(closed_end, kCtrl + (kTrcd + kCl + kBurst) + 127 * (kTrp + kTrcd + kCl + kBurst));
   EXPECT_EQ(closed.stats().row_hits, 0u);
   EXPECT_EQ(closed.stats().row_misses, 128u);
-  // Closed policy, isolated access to the row just used: tRCD + CL, never a hit.
-  EXPECT_EQ(closed.access(100000, 0, 64, false, Surface::Depth), 100000 + kCtrl + kTrcd + kCl + kBurst);
 }
 
 TEST(MemorySystem, RowHitsOfASequentialStreamCountedByHand) {
@@ -171,19 +191,27 @@ TEST(MemorySystem, TrasDelaysThePrechargeOfAConflictingRow) {
   }
 }
 
-// Closed rows: each burst of a run re-activates once the previous data ended
-// and its row was open tRAS, plus tRP. Three bursts, tRAS 40: activates at 40,
-// max(66, 80) + 11 = 91 and max(117, 131) + 11 = 142; data of the last at
-// 142 + 22 = 164 .. 168. (Without tRAS: every step is tRP + tRCD + CL + burst.)
-TEST(MemorySystem, TrasSpacesTheActivatesOfAClosedRowRun) {
+// Closed page: each request's run re-activates once the previous run's data
+// ended and its row was open tRAS, plus tRP. Three requests of one burst to
+// one row, tRAS 40: activates at 40, max(66, 80) + 11 = 91 and
+// max(117, 131) + 11 = 142; data of the last at 142 + 22 = 164 .. 168. (Without
+// tRAS: every step is tRP + tRCD + CL + burst.) As one request of three bursts
+// the run activates once: 40 + 22 + 12 = 74.
+TEST(MemorySystem, TrasSpacesTheActivatesOfClosedPageRuns) {
   DramConfig c = roundConfig(1);
   c.open_row = false;
   c.tras = 40;
   MemorySystem m(c, kRoundMhz);
-  EXPECT_EQ(m.access(0, 0, 192, false, Surface::BlendArrays), 168u);
+  Cycle end = 0;
+  for (uint64_t i = 0; i < 3; ++i) end = std::max(end, m.access(0, i * 64, 64, false, Surface::BlendArrays));
+  EXPECT_EQ(end, 168u);
+  MemorySystem one(c, kRoundMhz);
+  EXPECT_EQ(one.access(0, 0, 192, false, Surface::BlendArrays), kCtrl + kTrcd + kCl + 3 * kBurst);
   c.tras = 0;
   MemorySystem none(c, kRoundMhz);
-  EXPECT_EQ(none.access(0, 0, 192, false, Surface::BlendArrays), kCtrl + 3 * (kTrcd + kCl + kBurst) + 2 * kTrp);
+  end = 0;
+  for (uint64_t i = 0; i < 3; ++i) end = std::max(end, none.access(0, i * 64, 64, false, Surface::BlendArrays));
+  EXPECT_EQ(end, kCtrl + 3 * (kTrcd + kCl + kBurst) + 2 * kTrp);
 }
 
 // Two sequential streams a partition region apart (2^36 B) read alternately:
@@ -352,14 +380,17 @@ TEST(MemorySystem, BusBytesOfOneRequestStraddleIntervals) {
     want[10] = 128;
     EXPECT_EQ(m.stats().bus_bytes_per_interval, want);
   }
-  // Closed row: every burst re-activates after the previous one's data and
-  // precharge, 37 cycles apart: starts 62, 99, 136, 173, done at 177.
+  // Closed page, four requests of one burst: each re-activates after the
+  // previous one's data and precharge, 37 cycles apart: starts 62, 99, 136,
+  // 173, done at 177.
   {
     DramConfig c = roundConfig(1);
     c.open_row = false;
     MemorySystem m(c, kRoundMhz);
     m.setSampleInterval(50);
-    EXPECT_EQ(m.access(0, 0, 256, false, Surface::Depth), 177u);
+    Cycle end = 0;
+    for (uint64_t i = 0; i < 4; ++i) end = std::max(end, m.access(0, i * 64, 64, false, Surface::Depth));
+    EXPECT_EQ(end, 177u);
     EXPECT_EQ(m.stats().bus_bytes_per_interval, (std::vector<uint64_t>{0, 128, 64, 64}));
     EXPECT_EQ(m.stats().row_misses, 4u);
     EXPECT_EQ(m.stats().row_hits, 0u);
@@ -401,6 +432,7 @@ class ReferenceDram {
     if (bytes == 0) return now;
     (write ? stats_.write_bytes : stats_.read_bytes)[unsigned(s)] += bytes;
     ++stats_.requests;
+    ++requests_;
     const uint64_t arrive = (now << 16) + ctrl_;
     uint64_t done = arrive;
     const uint64_t B = c_.burst_bytes, I = c_.interleave_bytes, C = c_.channels, R = c_.row_bytes, K = c_.banks;
@@ -432,10 +464,16 @@ class ReferenceDram {
           k.row = row;
           col = k.row_ready;
         }
+      } else if (k.run_request == requests_ && k.row == row) {
+        ++stats_.row_hits;  // closed page: a later burst of the run this request opened
+        col = k.row_ready;
       } else {
-        ++stats_.row_misses;
+        ++stats_.row_misses;  // closed page: the bank was precharged after its last run
         k.act = std::max(arrive, k.act_ready);
-        col = k.act + trcd_;
+        k.row_ready = k.act + trcd_;
+        k.run_request = requests_;
+        k.row = row;
+        col = k.row_ready;
       }
       const uint64_t start = std::max(col + cl_, bus_[ch]);
       const uint64_t end = start + burst_;
@@ -461,7 +499,9 @@ class ReferenceDram {
   struct Bank {
     bool open = false;
     uint64_t row = 0, row_ready = 0, last_end = 0, act_ready = 0, act = 0;
+    uint64_t run_request = 0;  // closed page: the request whose run has the row open
   };
+  uint64_t requests_ = 0;
   DramConfig c_;
   uint64_t ctrl_, cl_, trcd_, trp_, tras_, burst_;
   std::vector<uint64_t> bus_, busy_;
@@ -663,19 +703,20 @@ TEST(MemorySystem, RefreshTakesItsShareOfTheBandwidth) {
   EXPECT_LE(double(refreshed), busy * period / (period - per_window) + period);  // <= 19,746
 }
 
-// Closed rows: every burst activates its own row, so with refresh a request's
-// bursts are placed one by one and a window falls between two of them.
-TEST(MemorySystem, ClosedRowBurstsOfOneRequestStraddleARefresh) {
+// Closed page: a request's run is placed whole between two refreshes, like an
+// open-row run on a closed bank.
+TEST(MemorySystem, ClosedPageRunMeetingARefreshWaitsForItsEnd) {
   DramConfig c = refreshConfig(1);
   c.open_row = false;
   DramConfig plain = c;
   plain.trefi_ns = plain.trfc_ns = 0;
-  // Two bursts at 930: the first activates at 970 and ends at 996; the second
-  // could activate at 996 + tRP = 1007, inside [1000, 1100): it activates at 1100.
+  // Two bursts at 940: the run activates at 980, its data would be on the bus
+  // at 1002-1010, inside [1000, 1100): it activates at 1100 instead.
   MemorySystem m(c, kRoundMhz), p(plain, kRoundMhz);
-  EXPECT_EQ(p.access(930, 0, 128, false, Surface::Depth), 1007 + kTrcd + kCl + kBurst);  // 1033 without refresh
-  EXPECT_EQ(m.access(930, 0, 128, false, Surface::Depth), 1100 + kTrcd + kCl + kBurst);  // 1126
-  EXPECT_EQ(m.stats().row_misses, 2u);
+  EXPECT_EQ(p.access(940, 0, 128, false, Surface::Depth), 980 + kTrcd + kCl + 2 * kBurst);   // 1010 without refresh
+  EXPECT_EQ(m.access(940, 0, 128, false, Surface::Depth), 1100 + kTrcd + kCl + 2 * kBurst);  // 1130
+  EXPECT_EQ(m.stats().row_misses, 1u);
+  EXPECT_EQ(m.stats().row_hits, 1u);
   EXPECT_EQ(m.stats().channel_busy[0], 2 * kBurst);
 }
 
