@@ -199,6 +199,11 @@ const std::vector<Property>& registry() {
       integer("dram.trp", &R::dram, &DramConfig::trp, 1, 255, "tCK", "precharge time"),
       integer("dram.tras", &R::dram, &DramConfig::tras, 0, 255, "tCK",
               "activate to precharge: a row stays open at least this long (0 = no limit)"),
+      integer("dram.twtr", &R::dram, &DramConfig::twtr, 0, 255, "tCK",
+              "write-to-read turnaround: end of write data to the next read command on the channel; the read's "
+              "data follows CL later, so the bus idles tWTR + CL at each switch from writes to reads"),
+      integer("dram.trtw", &R::dram, &DramConfig::trtw, 0, 255, "tCK",
+              "read-to-write turnaround: idle data bus between read data and the next write data"),
       integer("dram.banks", &R::dram, &DramConfig::banks, 1, 256, "", "banks per channel"),
       integer("dram.row_bytes", &R::dram, &DramConfig::row_bytes, 64, 1u << 20, "bytes",
               "row-buffer size per bank (across the channel's chips)", true),
@@ -219,6 +224,15 @@ const std::vector<Property>& registry() {
            "refresh"),
       real("dram.trfc_ns", &R::dram, &DramConfig::trfc_ns, 0, false, 100000, "ns",
            "refresh cycle time: for tRFC the channel moves no data, and its open rows are closed after it"),
+      integer("dram.write_queue", &R::dram, &DramConfig::write_queue, 1, 4096, "bursts",
+              "posted-write entries per channel: a write burst holds one from its acceptance until its data is on "
+              "the bus; a full queue makes the writer wait"),
+      integer("dram.write_high", &R::dram, &DramConfig::write_high, 1, 4096, "bursts",
+              "high watermark: when this many write bursts wait on a channel, its controller drains writes in a "
+              "batch (reads go first otherwise); write_high = 1, write_low = 0 writes every write at once"),
+      integer("dram.write_low", &R::dram, &DramConfig::write_low, 0, 4095, "bursts",
+              "low watermark: a batch stops once at most this many write bursts wait (whole rows of the oldest "
+              "writes are drained)"),
 
       integer("stats.interval_cycles", &R::stats, &StatsConfig::interval_cycles, 1,
               std::numeric_limits<uint64_t>::max(), "cycles", "time-series sample period"),
@@ -518,6 +532,15 @@ void ConfigTree::validate() const {
                                c.dram.burst_bytes, c.dram.interleave_bytes));
   if (c.dram.burst_bytes > c.dram.row_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.row_bytes ({})", c.dram.burst_bytes, c.dram.row_bytes));
+  // The write queue's watermarks (MEMORY.md): a drain starts at write_high
+  // waiting bursts and stops at or below write_low, within write_queue entries.
+  if (c.dram.write_high > c.dram.write_queue)
+    errs.push_back(fmt::format(
+        "dram.write_high ({}) > dram.write_queue ({}): the high watermark must fit in the write queue",
+        c.dram.write_high, c.dram.write_queue));
+  if (c.dram.write_low >= c.dram.write_high)
+    errs.push_back(fmt::format("dram.write_low ({}) >= dram.write_high ({}): the low watermark must be below the high one",
+                               c.dram.write_low, c.dram.write_high));
   if (c.dram.trefi_ns > 0 && c.clock.core_mhz > 0 && c.dram.channel_gbps > 0 && c.dram.tck_ns > 0) {
     const std::string problem = DramTimings::refreshProblem(c.dram, c.clock.core_mhz);
     if (!problem.empty()) errs.push_back(problem);

@@ -35,6 +35,8 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
   trcd = tck(cfg.trcd);
   trp = tck(cfg.trp);
   tras = tck(cfg.tras);
+  twtr = tck(cfg.twtr);
+  trtw = tck(cfg.trtw);
   const double burst_cycles = cfg.burst_bytes / bytes_per_cycle;
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
   require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");

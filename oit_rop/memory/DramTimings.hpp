@@ -31,6 +31,7 @@ struct DramTimings {
 
   double bytes_per_cycle = 0;  // one channel's data bus
   uint64_t ctrl = 0, cl = 0, trcd = 0, trp = 0, tras = 0, burst = 0;
+  uint64_t twtr = 0, trtw = 0;  // write-to-read (to the read command), read-to-write (idle bus)
 
   // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
   // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /

@@ -45,8 +45,10 @@ uint64_t MemoryStats::writeBytes() const {
 
 MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
     : cfg_(checkedGeometry(cfg)), map_(cfg_), t_(cfg_, core_mhz) {
-  bus_free_.assign(cfg.channels, 0);
-  busy_ticks_.assign(cfg.channels, 0);
+  require(cfg.write_queue >= 1 && cfg.write_high >= 1 && cfg.write_high <= cfg.write_queue &&
+              cfg.write_low < cfg.write_high,
+          "write watermarks must satisfy write_low < write_high <= write_queue");
+  channels_.assign(cfg.channels, Channel(cfg));
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
 }
@@ -60,6 +62,8 @@ double MemorySystem::trcdCycles() const { return DramTimings::cycles(t_.trcd); }
 double MemorySystem::trpCycles() const { return DramTimings::cycles(t_.trp); }
 double MemorySystem::trasCycles() const { return DramTimings::cycles(t_.tras); }
 double MemorySystem::burstCycles() const { return DramTimings::cycles(t_.burst); }
+double MemorySystem::twtrCycles() const { return DramTimings::cycles(t_.twtr); }
+double MemorySystem::trtwCycles() const { return DramTimings::cycles(t_.trtw); }
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
@@ -114,29 +118,13 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   const unsigned si = static_cast<unsigned>(s);
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   ++stats_.requests;
-  return map_.pow2 ? book<true>(now, addr, bytes) : book<false>(now, addr, bytes);
+  return map_.pow2 ? book<true>(now, addr, bytes, write) : book<false>(now, addr, bytes, write);
 }
 
 template <bool Pow2>
-Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
-  // The stores below could alias members, so the compiler reloads members after
-  // them; a few scalars every run uses are copied. Copying more (the whole
-  // address map and every timing, as before) cost more per call than the
-  // reloads: most of it lands on the stack anyway.
+Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   const DramDivisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
   const DramDivisor& row_div = map_.row_bursts;
-  const bool multi_channel = map_.multi_channel;
-  const bool open_row = cfg_.open_row;
-  const uint64_t refresh_period = t_.refresh_period;
-  const unsigned banks = cfg_.banks;
-  const uint64_t cl = t_.cl, burst = t_.burst;
-  const uint64_t &trcd = t_.trcd, &trp = t_.trp, &tras = t_.tras;
-  uint64_t* const bus_free = bus_free_.data();
-  uint64_t* const busy_ticks = busy_ticks_.data();
-  Cycle* const channel_busy = stats_.channel_busy.data();
-  Bank* const bank_state = banks_.data();
-  uint64_t hits = 0, misses = 0;
-
   const uint64_t arrive = (uint64_t(now) << kTickShift) + t_.ctrl;
   uint64_t done = arrive;
   const uint64_t first = map_.burst.div<Pow2>(addr);
@@ -145,22 +133,15 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   // request's bursts on one channel are one range of local bursts. It is booked
   // channel by channel, in address order inside a channel, a run of bursts
   // sharing bank and row (up to the row's end) at a time: channels share no
-  // state but sums and maxima, so this gives the times of booking burst by
-  // burst in address order. Per burst the formulas of MEMORY.md apply; inside
-  // a run they reduce to a closed form, which gives the same times:
-  // the first burst hits or opens the row (closed page: activates it, the
-  // bank being precharged); the others hit it and their column command issues
-  // at the same tick (row_ready, >= arrive, does not change), so each waits
-  // only for the bus, i.e. the previous burst's end. A closed page
-  // auto-precharges after the run's last burst.
+  // state but sums and maxima, so the order across channels changes nothing.
   // (Booked per interleave chunk, a 2 KiB line on the presets was 8 runs; now 2.)
   const uint64_t chunk_bursts = chunk_div.d, row_bursts = row_div.d, channels = channel_div.d;
   const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
-  const uint64_t touched_channels = multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  const uint64_t touched_channels = map_.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
   for (uint64_t j = 0; j < touched_channels; ++j) {
     unsigned ch = 0;
     uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
-    if (multi_channel) {
+    if (map_.multi_channel) {
       const uint64_t k = k0 + j;                                       // the channel's first chunk
       const uint64_t kl = k + channel_div.div<Pow2>(k1 - k) * channels;  // and its last
       ch = static_cast<unsigned>(channel_div.mod<Pow2>(k));
@@ -175,102 +156,147 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       uint64_t row;
       map_.bankRow<Pow2>(row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
-      Bank& bank = bank_state[size_t(ch) * banks + bank_no];
-      // With refresh the run is placed whole between two refreshes: when it
-      // would meet one, it is placed again after it, on the bank the refresh
-      // left closed (b, a copy, starts from the committed state on every try;
-      // without refresh b is the bank itself: one try).
-      Bank copy;
-      Bank& b = refresh_period ? copy : bank;
-      uint64_t earliest = arrive;   // no command of the run before this
-      uint64_t column;              // tick the run's first column command (read or write) issues
-      uint64_t act = 0;             // closed page: the run's activate
-      uint64_t xfer, last_xfer, run_hits, run_misses;
-      bool refreshed = false;       // a refresh closed the bank's row
-      for (unsigned tries = 0;; ++tries) {
-        uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
-        if (refresh_period) {
-          if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
-          b = bank;
-          // A refresh since the row was opened closed it.
-          if (open_row && b.open_row != kNoRow) {
-            const uint64_t w = t_.lastRefreshStart(ch, std::max(earliest, b.row_ready));
-            if (w > b.act) {
-              refreshed = true;
-              earliest = std::max(earliest, w + t_.refresh_rfc);
-            }
-          }
-          if (refreshed) b.open_row = kNoRow;
-        }
-        if (open_row) {
-          if (b.open_row == row) {
-            run_hits = n;
-            run_misses = 0;
-            column = std::max(earliest, b.row_ready);
-            first_cmd = column;
-          } else {
-            run_hits = n - 1;
-            run_misses = 1;
-            // Precharge may start once the open row is active, its transfers ended
-            // and it has been open tRAS.
-            uint64_t start = std::max({earliest, b.row_ready, b.last_end});
-            first_cmd = start;
-            if (b.open_row != kNoRow) {
-              first_cmd = std::max(start, b.act + tras);
-              start = first_cmd + trp;
-            }
-            b.open_row = row;
-            b.act = start;
-            b.row_ready = start + trcd;
-            column = b.row_ready;
-          }
-        } else {
-          // Closed page: the bank was precharged after its last run; the
-          // run's first burst activates the row, the others hit it.
-          run_hits = n - 1;
-          run_misses = 1;
-          act = std::max(earliest, b.act_ready);
-          column = act + trcd;
-          first_cmd = act;
-        }
-        xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-        last_xfer = xfer + (n - 1) * burst;
-        if (!refresh_period) break;
-        const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
-        if (!after) break;
-        earliest = after;
-        refreshed = true;
-      }
-      if (refresh_period) bank = b;
-      hits += run_hits;
-      misses += run_misses;
-      const uint64_t end = last_xfer + burst;
-      bus_free[ch] = end;
-      if (sample_interval_) {
-        // Usually the whole run starts in the bucket of the previous one.
-        const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
-        if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
-          stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
-        } else {
-          sampleBursts(xfer, n, burst);
-        }
-      }
-      bank.last_end = std::max(bank.last_end, end);
-      if (!open_row) {
-        // Auto-precharge after the run's data, once the row was open tRAS.
-        bank.act = act;
-        bank.act_ready = std::max(bank.last_end, act + tras) + trp;
-      }
-      busy_ticks[ch] += n * burst;
-      channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
-      done = std::max(done, end);
+      done = std::max(done, write ? postWrite(ch, bank_no, row, n, arrive) : bookRun<false>(ch, bank_no, row, n, arrive));
     }
   }
-  stats_.row_hits += hits;
-  stats_.row_misses += misses;
-  const Cycle completion = (done + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
+  stats_.row_hits = hits_;
+  stats_.row_misses = misses_;
+  const Cycle completion = DramTimings::ceilCycles(done);
   stats_.last_completion = std::max(stats_.last_completion, completion);
   return completion;
+}
+
+uint64_t MemorySystem::postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive) {
+  DramWriteQueue& q = channels_[ch].writes;
+  // A run that does not fit beside the waiting writes drains them (the
+  // controller switches to writes), then waits for room: entries free as
+  // drained data reaches the bus.
+  if (q.wouldOverflow(n)) drainBatch(ch, arrive, true);
+  const uint64_t accepted = q.roomAt(arrive, n);
+  q.add({bank_no, row, n, accepted});
+  if (q.atHighWatermark()) drainBatch(ch, accepted, false);
+  return accepted;
+}
+
+void MemorySystem::drainBatch(unsigned ch, uint64_t at, bool all) {
+  DramWriteQueue& q = channels_[ch].writes;
+  // takeBatch() returns the queue's own vector: bookRun does not touch the queue.
+  for (const DramWriteQueue::Run& r : q.takeBatch(all))
+    q.drained(bookRun<true>(ch, r.bank, r.row, r.bursts, std::max(at, r.accepted)), r.bursts);
+}
+
+Cycle MemorySystem::drainWrites(Cycle now) {
+  const uint64_t at = uint64_t(now) << kTickShift;
+  uint64_t done = at;
+  for (unsigned ch = 0; ch < channels_.size(); ++ch) {
+    if (!channels_[ch].writes.empty()) drainBatch(ch, at, true);
+    done = std::max(done, channels_[ch].last_write_end);
+  }
+  stats_.row_hits = hits_;
+  stats_.row_misses = misses_;
+  const Cycle completion = DramTimings::ceilCycles(done);
+  stats_.last_completion = std::max(stats_.last_completion, completion);
+  return completion;
+}
+
+template <bool Write>
+uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest) {
+  Channel& c = channels_[ch];
+  Bank& bank = banks_[size_t(ch) * cfg_.banks + bank_no];
+  const uint64_t cl = t_.cl, burst = t_.burst, trcd = t_.trcd, trp = t_.trp, tras = t_.tras;
+  const uint64_t refresh_period = t_.refresh_period;
+  const bool open_row = cfg_.open_row;
+  // Turnarounds: a read command waits tWTR after the last write data; write
+  // data leaves tRTW of idle bus after the last read data.
+  const uint64_t bus_floor = Write ? std::max(c.bus_free, c.last_read_end + t_.trtw) : c.bus_free;
+  const uint64_t column_floor = Write ? 0 : c.last_write_end + t_.twtr;
+  // The run's first burst hits or opens the row (closed page: activates it,
+  // the bank being precharged); the others hit it and their column command
+  // issues at the same tick, so each waits only for the bus, i.e. the
+  // previous burst's end. A closed page auto-precharges after the run's last
+  // burst. With refresh the run is placed whole between two refreshes: when it
+  // would meet one, it is placed again after it, on the bank the refresh left
+  // closed (b, a copy, starts from the committed state on every try; without
+  // refresh b is the bank itself: one try).
+  Bank copy;
+  Bank& b = refresh_period ? copy : bank;
+  uint64_t column;   // tick the run's first column command (read or write) issues
+  uint64_t act = 0;  // closed page: the run's activate
+  uint64_t xfer, run_hits;
+  const uint64_t len = n * burst;
+  bool refreshed = false;  // a refresh closed the bank's row
+  for (unsigned tries = 0;; ++tries) {
+    uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
+    if (refresh_period) {
+      if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
+      b = bank;
+      // A refresh since the row was opened closed it.
+      if (open_row && b.open_row != kNoRow) {
+        const uint64_t w = t_.lastRefreshStart(ch, std::max(earliest, b.row_ready));
+        if (w > b.act) {
+          refreshed = true;
+          earliest = std::max(earliest, w + t_.refresh_rfc);
+        }
+      }
+      if (refreshed) b.open_row = kNoRow;
+    }
+    if (open_row) {
+      if (b.open_row == row) {
+        run_hits = n;
+        column = std::max(earliest, b.row_ready);
+        first_cmd = column;
+      } else {
+        run_hits = n - 1;
+        // Precharge may start once the open row is active, its transfers ended
+        // and it has been open tRAS.
+        uint64_t start = std::max({earliest, b.row_ready, b.last_end});
+        first_cmd = start;
+        if (b.open_row != kNoRow) {
+          first_cmd = std::max(start, b.act + tras);
+          start = first_cmd + trp;
+        }
+        b.open_row = row;
+        b.act = start;
+        b.row_ready = start + trcd;
+        column = b.row_ready;
+      }
+    } else {
+      run_hits = n - 1;
+      act = std::max(earliest, b.act_ready);
+      column = act + trcd;
+      first_cmd = act;
+    }
+    xfer = std::max(std::max(column, column_floor) + cl, bus_floor);  // the first burst's bus start
+    if (!refresh_period) break;
+    const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, xfer + len);
+    if (!after) break;
+    earliest = after;
+    refreshed = true;
+  }
+  if (refresh_period) bank = b;
+  hits_ += run_hits;
+  misses_ += n - run_hits;
+  const uint64_t end = xfer + len;
+  c.bus_free = end;
+  uint64_t& last_end = Write ? c.last_write_end : c.last_read_end;
+  last_end = std::max(last_end, end);
+  if (sample_interval_) {
+    // Usually the whole run starts in the bucket of the previous one.
+    const Cycle c_first = xfer >> kTickShift, c_last = (end - burst) >> kTickShift;
+    if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_)
+      stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
+    else
+      sampleBursts(xfer, n, burst);
+  }
+  bank.last_end = std::max(bank.last_end, end);
+  if (!open_row) {
+    // Auto-precharge after the run's data, once the row was open tRAS.
+    bank.act = act;
+    bank.act_ready = std::max(bank.last_end, act + tras) + trp;
+  }
+  c.busy += len;
+  stats_.channel_busy[ch] = DramTimings::ceilCycles(c.busy);
+  return end;
 }
 
 }  // namespace oit::rop

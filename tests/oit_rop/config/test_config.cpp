@@ -76,8 +76,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 16u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 52u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 21u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 57u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -127,6 +127,30 @@ TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
   t.set("dram.trfc_ns", "0");
   e = errorOf([&] { t.validate(); });
   EXPECT_NE(e.find("dram.trefi_ns > 0 needs dram.trfc_ns > 0"), std::string::npos) << e;
+}
+
+// The write queue's watermarks out of order are refused by validate(), one
+// line each naming the parameters and the rule; sizes of 0 by their range.
+TEST(ConfigTree, DramWriteWatermarksAreValidated) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.write_low", "56");  // = write_high
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("\n  dram.write_low (56) >= dram.write_high (56): the low watermark must be below the high one"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_low", "32");
+  t.set("dram.write_high", "80");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("\n  dram.write_high (80) > dram.write_queue (64): the high watermark must fit in the write queue"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_queue", "80");
+  EXPECT_NO_THROW(t.validate());  // the high watermark may be the whole queue
+  e = errorOf([&] { t.set("dram.write_queue", "0"); });
+  EXPECT_EQ(e, "dram.write_queue: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.write_high", "0"); });
+  EXPECT_EQ(e, "dram.write_high: '0' is out of range; expected an integer [1, 4096] (bursts)");
 }
 
 TEST(ConfigTree, PresetNames) {

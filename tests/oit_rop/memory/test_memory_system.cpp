@@ -70,11 +70,24 @@ TEST(MemorySystem, SingleReadLatencyClosedBankRowHitAndRowMiss) {
   EXPECT_EQ(m.stats().last_completion, 2000 + kCtrl + kTrp + kTrcd + kCl + kBurst);
 }
 
-TEST(MemorySystem, WritesUseTheSameLatency) {
+// Writes are posted: accepted into the channel's write queue after the
+// controller latency, written later (here: at the frame-end drain).
+TEST(MemorySystem, WritesArePostedAndWrittenAtTheDrain) {
   MemorySystem m(roundConfig(1), kRoundMhz);
-  EXPECT_EQ(m.access(0, 0, 64, true, Surface::Colour), kCtrl + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.access(0, 0, 64, true, Surface::Colour), kCtrl);
   EXPECT_EQ(m.stats().write_bytes[unsigned(Surface::Colour)], 64u);
   EXPECT_EQ(m.stats().readBytes(), 0u);
+  EXPECT_EQ(m.pendingWriteBursts(0), 1u);
+  EXPECT_EQ(m.stats().channel_busy[0], 0u);
+  // The drain at 100 writes it like a read of a closed bank: 100 + tRCD + CL + burst.
+  EXPECT_EQ(m.drainWrites(100), 100 + kTrcd + kCl + kBurst);
+  EXPECT_EQ(m.pendingWriteBursts(0), 0u);
+  EXPECT_EQ(m.stats().channel_busy[0], kBurst);
+  EXPECT_EQ(m.stats().row_misses, 1u);
+  EXPECT_EQ(m.stats().last_completion, 100 + kTrcd + kCl + kBurst);
+  // Nothing waits: the drain returns its cycle (or the last write's end).
+  EXPECT_EQ(m.drainWrites(90), 126u);
+  EXPECT_EQ(m.drainWrites(200), 200u);
 }
 
 TEST(MemorySystem, PartialBurstCostsAFullBurstButCountsExactBytes) {
@@ -353,6 +366,7 @@ TEST(MemorySystem, CoarsenedSamplesEqualSamplingAtTwiceTheInterval) {
               coarse.access(now, addr, bytes, write, Surface::BlendArrays));
     now += rnd(40);
   }
+  EXPECT_EQ(fine.drainWrites(now), coarse.drainWrites(now));  // the writes still waiting
   EXPECT_EQ(fine.stats().bus_bytes_per_interval, coarse.stats().bus_bytes_per_interval);
   uint64_t sum = 0;
   for (uint64_t b : fine.stats().bus_bytes_per_interval) sum += b;
@@ -409,7 +423,11 @@ TEST(MemorySystem, BusBytesOfOneRequestStraddleIntervals) {
 }
 
 // Reference: the per-burst booking of MEMORY.md written out directly (address
-// mapping by its formulas, one burst at a time), on the ticks the model uses.
+// mapping by its formulas, one burst at a time), on the ticks the model uses,
+// for a write queue that drains every write at once (dram.write_high = 1,
+// write_low = 0, a queue too large to push back): a write is booked when it
+// arrives and returns its acceptance (posted); turnarounds tWTR and tRTW apply
+// burst by burst.
 class ReferenceDram {
  public:
   ReferenceDram(const DramConfig& c, const MemorySystem& m)
@@ -420,7 +438,11 @@ class ReferenceDram {
         trp_(ticks(m.trpCycles())),
         tras_(ticks(m.trasCycles())),
         burst_(ticks(m.burstCycles())),
+        twtr_(ticks(m.twtrCycles())),
+        trtw_(ticks(m.trtwCycles())),
         bus_(c.channels, 0),
+        last_read_end_(c.channels, 0),
+        last_write_end_(c.channels, 0),
         busy_(c.channels, 0),
         banks_(size_t(c.channels) * c.banks) {
     stats_.channel_busy.assign(c.channels, 0);
@@ -475,9 +497,12 @@ class ReferenceDram {
         k.row = row;
         col = k.row_ready;
       }
-      const uint64_t start = std::max(col + cl_, bus_[ch]);
+      if (!write) col = std::max(col, last_write_end_[ch] + twtr_);  // tWTR
+      const uint64_t bus_floor = write ? std::max(bus_[ch], last_read_end_[ch] + trtw_) : bus_[ch];  // tRTW
+      const uint64_t start = std::max(col + cl_, bus_floor);
       const uint64_t end = start + burst_;
       bus_[ch] = end;
+      (write ? last_write_end_ : last_read_end_)[ch] = end;
       k.last_end = std::max(k.last_end, end);
       if (!c_.open_row) k.act_ready = std::max(k.last_end, k.act + tras_) + trp_;
       if (interval_) {
@@ -487,7 +512,7 @@ class ReferenceDram {
       }
       busy_[ch] += burst_;
       stats_.channel_busy[ch] = (busy_[ch] + 0xffff) >> 16;
-      done = std::max(done, end);
+      if (!write) done = std::max(done, end);  // a write completes when accepted
     }
     const Cycle completion = (done + 0xffff) >> 16;
     stats_.last_completion = std::max(stats_.last_completion, completion);
@@ -503,8 +528,8 @@ class ReferenceDram {
   };
   uint64_t requests_ = 0;
   DramConfig c_;
-  uint64_t ctrl_, cl_, trcd_, trp_, tras_, burst_;
-  std::vector<uint64_t> bus_, busy_;
+  uint64_t ctrl_, cl_, trcd_, trp_, tras_, burst_, twtr_, trtw_;
+  std::vector<uint64_t> bus_, last_read_end_, last_write_end_, busy_;
   std::vector<Bank> banks_;
   MemoryStats stats_;
   Cycle interval_ = 0;
@@ -566,6 +591,11 @@ TEST(MemorySystem, MatchesBurstByBurstReferenceOnRandomStreams) {
           c.cl = 11 + unsigned(cases % 5);
           c.trcd = 11;
           c.trp = 9 + unsigned(cases % 7);
+          c.twtr = unsigned(cases % 9);  // 0 .. 8 tCK
+          c.trtw = unsigned(cases % 4);
+          c.write_high = 1;  // every write drains when it arrives
+          c.write_low = 0;
+          c.write_queue = 1u << 30;  // and never waits for room
           MemorySystem m(c, t.mhz);
           ReferenceDram ref(c, m);
           m.setSampleInterval(interval);
@@ -762,6 +792,7 @@ TEST(MemorySystem, BusBytesPerIntervalNeverExceedBandwidth) {
     addr_a += 256;
     addr_b += 256;
   }
+  m.drainWrites(4500);
   const auto& bus = m.stats().bus_bytes_per_interval;
   ASSERT_FALSE(bus.empty());
   uint64_t total = 0;
