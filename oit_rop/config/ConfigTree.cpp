@@ -224,6 +224,12 @@ const std::vector<Property>& registry() {
            "refresh"),
       real("dram.trfc_ns", &R::dram, &DramConfig::trfc_ns, 0, false, 100000, "ns",
            "refresh cycle time: for tRFC the channel moves no data, and its open rows are closed after it"),
+      enumeration("dram.scheduler", &R::dram, &DramConfig::scheduler, {"fcfs", "frfcfs"},
+                  "read scheduling: fcfs = first come first served; frfcfs = a read whose data can go earlier takes "
+                  "bus time the older reads leave idle (their precharge, activate, turnaround), never moving them"),
+      integer("dram.queue_depth", &R::dram, &DramConfig::queue_depth, 1, 4096, "bursts",
+              "FR-FCFS window per channel: a read may pass at most this many bursts of older requests "
+              "(1 = fcfs)"),
       integer("dram.write_queue", &R::dram, &DramConfig::write_queue, 1, 4096, "bursts",
               "posted-write entries per channel: a write burst holds one from its acceptance until its data is on "
               "the bus; a full queue makes the writer wait"),

@@ -14,6 +14,9 @@ enum class LockRelease : uint8_t { EndOfBlend, EndOfShader };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
+// The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
+// = a request whose data can go now may pass older ones (MEMORY.md).
+enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
 
 struct ClockConfig {
   double core_mhz = 1150.0;  // ROP / core clock
@@ -91,6 +94,8 @@ struct DramConfig {
   unsigned write_queue = 64;        // posted-write entries (bursts) per channel
   unsigned write_high = 56;         // waiting write bursts that start a drain
   unsigned write_low = 32;          // a drain stops at or below this
+  DramScheduler scheduler = DramScheduler::FrFcfs;
+  unsigned queue_depth = 64;        // bursts per channel the FR-FCFS scheduler looks over
   bool operator==(const DramConfig&) const = default;
 };
 

@@ -49,6 +49,7 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
               cfg.write_low < cfg.write_high,
           "write watermarks must satisfy write_low < write_high <= write_queue");
   channels_.assign(cfg.channels, Channel(cfg));
+  window_ = cfg.scheduler == DramScheduler::FrFcfs ? cfg.queue_depth : 0;
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
 }
@@ -203,6 +204,7 @@ template <bool Write>
 uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest) {
   Channel& c = channels_[ch];
   Bank& bank = banks_[size_t(ch) * cfg_.banks + bank_no];
+  const uint64_t arrive = earliest;
   const uint64_t cl = t_.cl, burst = t_.burst, trcd = t_.trcd, trp = t_.trp, tras = t_.tras;
   const uint64_t refresh_period = t_.refresh_period;
   const bool open_row = cfg_.open_row;
@@ -225,6 +227,8 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   uint64_t xfer, run_hits;
   const uint64_t len = n * burst;
   bool refreshed = false;  // a refresh closed the bank's row
+  size_t gap = 0;
+  bool in_gap = false;  // the run's data goes into idle bus time before the latest booking
   for (unsigned tries = 0;; ++tries) {
     uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
     if (refresh_period) {
@@ -267,6 +271,21 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
       first_cmd = act;
     }
     xfer = std::max(std::max(column, column_floor) + cl, bus_floor);  // the first burst's bus start
+    // A read the bus would delay may take a gap the bus left idle before its
+    // latest booking (FR-FCFS within the window, or any scheduler for a read
+    // that arrived before the one that left the gap), never moving a booking.
+    // Its bank timing is the same; with refresh only when no window lies
+    // between its first command and its data's end.
+    if (!Write && !refreshed && column + cl < xfer && c.gaps.latestEnd() >= column + cl + len) {
+      const DramBusGaps::Asker asker{arrive, c.booked, window_};
+      const uint64_t start = c.gaps.find(asker, column + cl, len, t_.twtr + cl, t_.trtw, gap);
+      if (start != DramBusGaps::kNone && start < xfer &&
+          (!refresh_period || !t_.refreshOverlapEnd(ch, first_cmd, start + len))) {
+        xfer = start;
+        in_gap = true;
+        break;
+      }
+    }
     if (!refresh_period) break;
     const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, xfer + len);
     if (!after) break;
@@ -277,7 +296,17 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   hits_ += run_hits;
   misses_ += n - run_hits;
   const uint64_t end = xfer + len;
-  c.bus_free = end;
+  if (in_gap) {
+    c.gaps.take(gap, xfer, len, burst);
+  } else {
+    // Idle bus before this run (its bank or a turnaround held it back, or it
+    // came late) is a gap a later read may take.
+    if (xfer >= c.bus_free + burst)
+      c.gaps.add({c.bus_free, xfer, c.booked, arrive, c.last_was_write, Write});
+    c.bus_free = end;
+    c.last_was_write = Write;
+  }
+  c.booked += n;
   uint64_t& last_end = Write ? c.last_write_end : c.last_read_end;
   last_end = std::max(last_end, end);
   if (sample_interval_) {

@@ -21,6 +21,7 @@
 
 #include "oit_rop/config/RopConfig.hpp"
 #include "oit_rop/memory/DramAddressMap.hpp"
+#include "oit_rop/memory/DramBusGaps.hpp"
 #include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/memory/DramWriteQueue.hpp"
 #include "oit_rop/Types.hpp"
@@ -103,11 +104,15 @@ class MemorySystem {
     uint64_t act = 0;            // ticks: the last activate (tRAS counts from it)
   };
 
-  // One channel: its data bus, its turnaround state and its write queue.
+  // One channel: its data bus, its turnaround state, the idle stretches a
+  // later read may take (DramBusGaps) and its write queue.
   struct Channel {
     uint64_t bus_free = 0;  // ticks: end of the latest data on the bus
     uint64_t busy = 0;      // ticks of data moved
     uint64_t last_read_end = 0, last_write_end = 0;  // ticks (turnarounds)
+    bool last_was_write = false;  // the data ending at bus_free is a write's
+    uint64_t booked = 0;          // bursts booked so far (the scheduler window's clock)
+    DramBusGaps gaps;
     DramWriteQueue writes;
     explicit Channel(const DramConfig& c) : writes(c.write_queue, c.write_high, c.write_low) {}
   };
@@ -116,7 +121,8 @@ class MemorySystem {
   template <bool Pow2>
   Cycle book(Cycle now, uint64_t addr, uint32_t bytes, bool write);
   // Books a run (n bursts on channel ch, bank, row; no command before
-  // `earliest`) on the bus and returns the end of its data (ticks).
+  // `earliest`, the request's arrival) on the bus and returns the end of its
+  // data (ticks). A read may take a gap the bus left idle (DramBusGaps).
   template <bool Write>
   uint64_t bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest);
   // Queues a write run arriving at `arrive`; returns the tick it is accepted.
@@ -133,6 +139,7 @@ class MemorySystem {
   std::vector<Channel> channels_;
   std::vector<Bank> banks_;  // channel-major: channel * banks + bank
   uint64_t hits_ = 0, misses_ = 0;  // row hits and misses of the runs booked (added to stats_)
+  uint64_t window_ = 0;  // DramBusGaps::Asker::window: queue_depth with FR-FCFS, 0 with FCFS
   MemoryStats stats_;
 };
 

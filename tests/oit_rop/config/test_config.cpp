@@ -76,8 +76,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 21u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 57u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 23u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 59u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -130,8 +130,9 @@ TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
 }
 
 // The write queue's watermarks out of order are refused by validate(), one
-// line each naming the parameters and the rule; sizes of 0 by their range.
-TEST(ConfigTree, DramWriteWatermarksAreValidated) {
+// line each naming the parameters and the rule; sizes of 0 and unknown
+// schedulers by their range.
+TEST(ConfigTree, DramControllerSettingsAreValidated) {
   ConfigTree t = ConfigTree::forPreset("igpu");
   EXPECT_NO_THROW(t.validate());
   t.set("dram.write_low", "56");  // = write_high
@@ -151,6 +152,10 @@ TEST(ConfigTree, DramWriteWatermarksAreValidated) {
   EXPECT_EQ(e, "dram.write_queue: '0' is out of range; expected an integer [1, 4096] (bursts)");
   e = errorOf([&] { t.set("dram.write_high", "0"); });
   EXPECT_EQ(e, "dram.write_high: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.queue_depth", "0"); });
+  EXPECT_EQ(e, "dram.queue_depth: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.scheduler", "fifo"); });
+  EXPECT_EQ(e, "dram.scheduler: 'fifo' is not a known value; expected one of fcfs | frfcfs");
 }
 
 TEST(ConfigTree, PresetNames) {
