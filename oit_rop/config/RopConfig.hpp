@@ -89,8 +89,8 @@ struct DramConfig {
   bool open_row = true;             // keep rows open (hits pay CL only); false: closed page
   bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
-  double trefi_ns = 0.0;            // refresh interval per channel (0: no refresh)
-  double trfc_ns = 0.0;             // refresh cycle time: no data moves, rows close
+  double trefi_ns = 7800.0;         // refresh interval per channel (0: no refresh); DDR3, <= 85 C
+  double trfc_ns = 260.0;           // refresh cycle time: no data moves, rows close; DDR3 4 Gb
   unsigned write_queue = 64;        // posted-write entries (bursts) per channel
   unsigned write_high = 56;         // waiting write bursts that start a drain
   unsigned write_low = 32;          // a drain stops at or below this

@@ -48,6 +48,7 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
     refresh_period = ticks(cfg.trefi_ns * cycles_per_ns);
     refresh_rfc = ticks(cfg.trfc_ns * cycles_per_ns);
     for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);
+    max_run_bursts = (refresh_period - refresh_rfc - trcd - cl) / burst;  // >= 1: refreshProblem
   }
 }
 
@@ -55,22 +56,20 @@ std::string DramTimings::refreshProblem(const DramConfig& cfg, double core_mhz) 
   if (cfg.trefi_ns == 0) return {};
   if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
     return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
-  // The longest run of bursts booked as one (a row, on a bank the refresh left
-  // closed, with either page policy) must fit between two refreshes: runs are
-  // placed whole (MEMORY.md).
+  // A run of bursts is placed whole between two refreshes, on a bank the
+  // refresh left closed (MEMORY.md); longer runs are booked in parts, but one
+  // burst must fit.
   const double cycles_per_ns = core_mhz / 1000.0;
   const auto ns = [&](double v) { return ticks(v * cycles_per_ns); };
   const uint64_t cl = ns(cfg.cl * cfg.tck_ns), trcd = ns(cfg.trcd * cfg.tck_ns);
   const uint64_t burst = ns(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
-  const uint64_t bursts = cfg.burst_bytes ? std::max<uint64_t>(1, cfg.row_bytes / cfg.burst_bytes) : 1;
-  const uint64_t run = trcd + cl + bursts * burst;
+  const uint64_t run = trcd + cl + burst;
   const uint64_t period = ns(cfg.trefi_ns), rfc = ns(cfg.trfc_ns);
   if (rfc < period && period - rfc >= run) return {};
   return fmt::format(
-      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer booked as one, {} "
+      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must hold an activate, CL and one burst of {} bytes "
       "({:.1f} ns here)",
-      cfg.trefi_ns, cfg.trfc_ns, fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes),
-      cycles(run) / cycles_per_ns);
+      cfg.trefi_ns, cfg.trfc_ns, cfg.burst_bytes, cycles(run) / cycles_per_ns);
 }
 
 }  // namespace oit::rop

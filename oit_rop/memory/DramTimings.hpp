@@ -38,6 +38,10 @@ struct DramTimings {
   // channels (staggered). period 0: no refresh.
   uint64_t refresh_period = 0, refresh_rfc = 0;
   std::vector<uint64_t> refresh_off;  // per channel
+  // The most bursts one run may hold: a run is placed whole between two
+  // refresh windows (on a bank a refresh left closed: tRCD + CL, then its
+  // data), a longer one is booked in parts. No limit without refresh.
+  uint64_t max_run_bursts = ~uint64_t(0);
   // Start of the latest window at or before t (0: none).
   uint64_t lastRefreshStart(unsigned ch, uint64_t t) const {
     const uint64_t off = refresh_off[ch];
@@ -53,7 +57,7 @@ struct DramTimings {
   }
 
   // "" when dram.trefi_ns / trfc_ns are usable at core_mhz, else what is wrong
-  // (the time between two refreshes must hold the longest run booked as one).
+  // (the time between two refreshes must hold an activate, CL and one burst).
   static std::string refreshProblem(const DramConfig& cfg, double core_mhz);
 };
 

@@ -202,6 +202,18 @@ Cycle MemorySystem::drainWrites(Cycle now) {
 
 template <bool Write>
 uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest) {
+  if (n > t_.max_run_bursts) {
+    // Too long for the time between two refreshes (a very slow channel):
+    // booked in parts; a later part hits the row the earlier one opened
+    // unless a refresh closed it (closed page: each part activates it).
+    uint64_t end = 0;
+    for (uint64_t left = n; left > 0;) {
+      const uint64_t k = std::min(left, t_.max_run_bursts);
+      end = bookRun<Write>(ch, bank_no, row, k, earliest);
+      left -= k;
+    }
+    return end;
+  }
   Channel& c = channels_[ch];
   Bank& bank = banks_[size_t(ch) * cfg_.banks + bank_no];
   const uint64_t arrive = earliest;

@@ -245,5 +245,32 @@ TEST(DramBounds, ReadWriteAlternationWithAndWithoutBatching) {
   }
 }
 
+// Refresh's share of the bus (the presets' JEDEC values, on by default): a
+// channel moves no data for tRFC of every tREFI (igpu DDR3 4 Gb: 260 of
+// 7,800 ns, 3.33 %; dgpu GDDR5: 110 of 1,900 ns, 5.79 %). In [0, T] at least
+// T / tREFI - 2 windows lie whole, so N bursts need T >= (N b - 2 tRFC) /
+// (1 - tRFC / tREFI); above that each window also re-opens the row the
+// refresh closed (tRCD + CL) and may idle the bus up to one run (one burst
+// here) before it.
+TEST(DramBounds, RefreshTakesItsShareOfTheBus) {
+  for (const char* preset : {"igpu", "dgpu"}) {
+    RopConfig c = presetConfig(preset);
+    c.dram.channels = 1;
+    c.dram.bank_hash = false;
+    ASSERT_GT(c.dram.trefi_ns, 0.0) << preset;  // on by default
+    MemorySystem m(c.dram, c.clock.core_mhz);
+    constexpr unsigned kN = 50000;
+    const double share = c.dram.trfc_ns / c.dram.trefi_ns;
+    const double rfc = c.dram.trfc_ns * c.clock.core_mhz / 1000;
+    const double bound = (kN * m.burstCycles() - 2 * rfc) / (1 - share);
+    const double end = double(streamEnd(m, rowHitStream(kN, c.dram.row_bytes / 64)));
+    expectNearBound(end, bound, preset);
+    // The refresh share of the stream's time: what the bus did not move data in.
+    const double idle = 1 - kN * m.burstCycles() / end;
+    EXPECT_GE(idle, share * 0.95) << preset;
+    EXPECT_LE(idle, share + 0.02) << preset;
+  }
+}
+
 }  // namespace
 }  // namespace oit::rop

@@ -90,30 +90,32 @@ TEST(DramTimings, RefreshWindowsAreStaggeredOverChannels) {
   EXPECT_EQ(t.refreshOverlapEnd(1, 1100 * kTick, 1900 * kTick), 1600 * kTick);
 }
 
-TEST(DramTimings, RefusesRefreshGapsShorterThanARow) {
+// A run is placed whole between two refresh windows, on a bank the refresh
+// left closed; a longer run is booked in parts of max_run_bursts:
+// (tREFI - tRFC - tRCD - CL) / burst = (1000 - 100 - 22) / 4 = 219 bursts.
+// Only a gap that cannot hold an activate, CL and one burst (26 cycles) is
+// refused.
+TEST(DramTimings, RefreshGapsHoldRunsOfBoundedLength) {
   DramConfig base = roundDramConfig(1);
   base.trefi_ns = 1000;
   base.trfc_ns = 100;
   EXPECT_EQ(DramTimings::refreshProblem(base, kRoundMhz), "");
-  // The longest run booked as one must fit in tREFI - tRFC: a row of 128
-  // bursts on a closed bank, tRCD + CL + 512 = 534 cycles, with either page
-  // policy (closed page: one activate per run too).
-  for (bool open_row : {true, false}) {
-    DramConfig c = base;
-    c.open_row = open_row;
-    c.trfc_ns = 1000 - 534;
-    EXPECT_EQ(DramTimings::refreshProblem(c, kRoundMhz), "") << open_row;
-    c.trfc_ns = 1000 - 534 + 1;
-    EXPECT_EQ(DramTimings::refreshProblem(c, kRoundMhz),
-              "dram.trefi_ns (1000 ns) minus dram.trfc_ns (467 ns) must be at least the longest transfer booked as "
-              "one, a row of 8192 bytes on a closed bank (534.0 ns here)");
-    EXPECT_THROW(DramTimings(c, kRoundMhz), std::invalid_argument);
-  }
+  EXPECT_EQ(DramTimings(base, kRoundMhz).max_run_bursts, 219u);
   DramConfig c = base;
+  c.trfc_ns = 1000 - 26;
+  EXPECT_EQ(DramTimings::refreshProblem(c, kRoundMhz), "");
+  EXPECT_EQ(DramTimings(c, kRoundMhz).max_run_bursts, 1u);
+  c.trfc_ns = 1000 - 26 + 1;
+  EXPECT_EQ(DramTimings::refreshProblem(c, kRoundMhz),
+            "dram.trefi_ns (1000 ns) minus dram.trfc_ns (975 ns) must hold an activate, CL and one burst of 64 bytes "
+            "(26.0 ns here)");
+  EXPECT_THROW(DramTimings(c, kRoundMhz), std::invalid_argument);
+  c = base;
   c.trfc_ns = 0;
   EXPECT_NE(DramTimings::refreshProblem(c, kRoundMhz).find("needs dram.trfc_ns > 0"), std::string::npos);
-  c.trefi_ns = 0;  // no refresh: tRFC is not used
+  c.trefi_ns = 0;  // no refresh: tRFC is not used, runs are not limited
   EXPECT_EQ(DramTimings::refreshProblem(c, kRoundMhz), "");
+  EXPECT_EQ(DramTimings(c, kRoundMhz).max_run_bursts, ~uint64_t(0));
 }
 
 }  // namespace
