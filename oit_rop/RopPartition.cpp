@@ -39,7 +39,8 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
       tok_(cfg_.lock.capacity),
       cache_q_(256),
-      tail_q_(256) {
+      tail_q_(256),
+      memory_(memory) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
   for (unsigned o = 0; o < model::kOutcomeCount; ++o)
@@ -262,9 +263,10 @@ void RopPartition::resolvePhase() {
     }
     advance(next, true);
   }
-  // The frame ends when the last posted write reached DRAM.
+  // The frame ends when the last posted write reached DRAM: the DRAM
+  // controller writes what its write queues still hold (MEMORY.md).
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-  const Cycle end = std::max(now_, last_write_done_);
+  const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);

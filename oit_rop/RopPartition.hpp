@@ -210,6 +210,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
   Cycle last_write_done_ = 0;
+  MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
   // The transparent passes' engine: one of the two (sim.engine).
   std::unique_ptr<CycleEngine> cycle_;

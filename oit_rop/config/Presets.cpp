@@ -41,6 +41,10 @@ RopConfig dgpu() {
   c.dram.trcd = 24;  // read; write tRCD 20 is not modelled separately
   c.dram.trp = 24;
   c.dram.tras = 56;
+  c.dram.twtr = 8;  // tWTR 5 ns (Ramulator's GDDR5 speed table) at tCK 0.667 ns
+  c.dram.trtw = 2;  // RD->WR = CL + BL/4 + 2 - WL: 2 tCK of idle data bus
+  c.dram.trefi_ns = 1900.0;  // 32 ms / 16,384 refresh commands (4 Gb GDDR5, as on the GTX 980)
+  c.dram.trfc_ns = 110.0;    // no GDDR5 datasheet at hand: an 8 Gb GDDR6's 110 ns (CONFIG.md)
   c.dram.banks = 16;
   c.dram.row_bytes = 4096;  // 2 KiB page per x32 chip, two chips per 64-bit channel
   c.dram.burst_bytes = 64;  // BL8 x 64 bit
@@ -64,13 +68,14 @@ const std::vector<PresetEntry>& presets() {
         "input.latency_min", "input.latency_max", "early_depth.latency", "lock.capacity",
         "lock.shader_tail", "cache.ways", "cache.miss_queue", "cache.hit_latency", "alu.base_latency",
         "alu.row_latency", "alu.fp16_rate", "alu.fp32_rate", "dram.row_bytes",
-        "dram.interleave_bytes", "dram.controller_ns"}},
+        "dram.interleave_bytes", "dram.controller_ns", "dram.trfc_ns", "dram.write_queue", "dram.write_high", "dram.write_low"}},
       {"dgpu", dgpu,
        {"partitions.tile_width", "partitions.tile_height", "input.fragments_per_clock",
         "input.latency_min", "input.latency_max", "early_depth.latency", "lock.capacity",
         "lock.shader_tail", "cache.size_bytes", "cache.ways", "cache.miss_queue", "cache.hit_latency",
         "alu.base_latency", "alu.row_latency", "alu.fp16_rate", "alu.fp32_rate", "dram.row_bytes",
-        "dram.interleave_bytes", "dram.controller_ns"}},
+        "dram.interleave_bytes", "dram.controller_ns", "dram.twtr", "dram.trtw", "dram.trefi_ns", "dram.trfc_ns",
+        "dram.write_queue", "dram.write_high", "dram.write_low"}},
   };
   return list;
 }

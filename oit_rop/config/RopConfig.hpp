@@ -19,6 +19,9 @@ enum class LockMode : uint8_t { Ordered, Unordered, None };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
+// The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
+// = a request whose data can go now may pass older ones (MEMORY.md).
+enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
 
 struct ClockConfig {
   double core_mhz = 1150.0;  // ROP / core clock
@@ -82,15 +85,22 @@ struct DramConfig {
   double tck_ns = 1.25;             // DRAM clock period
   unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
   unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
+  unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
+  unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
   unsigned banks = 8;
   unsigned row_bytes = 8192;        // row-buffer size per bank
   unsigned burst_bytes = 64;        // access granularity
   unsigned interleave_bytes = 256;  // channel interleave
-  bool open_row = true;             // keep rows open (hits pay CL only)
+  bool open_row = true;             // keep rows open (hits pay CL only); false: closed page
   bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
-  double trefi_ns = 0.0;            // refresh interval per channel (0: no refresh)
-  double trfc_ns = 0.0;             // refresh cycle time: no data moves, rows close
+  double trefi_ns = 7800.0;         // refresh interval per channel (0: no refresh); DDR3, <= 85 C
+  double trfc_ns = 260.0;           // refresh cycle time: no data moves, rows close; DDR3 4 Gb
+  unsigned write_queue = 64;        // posted-write entries (bursts) per channel
+  unsigned write_high = 56;         // waiting write bursts that start a drain
+  unsigned write_low = 32;          // a drain stops at or below this
+  DramScheduler scheduler = DramScheduler::FrFcfs;
+  unsigned queue_depth = 64;        // bursts per channel the FR-FCFS scheduler looks over
   bool operator==(const DramConfig&) const = default;
 };
 

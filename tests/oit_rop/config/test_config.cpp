@@ -76,8 +76,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 16u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 52u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 23u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 59u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -110,23 +110,58 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_FALSE(get("clock.core_mhz").inferred);
 }
 
-// DRAM refresh is off in both presets; a refresh gap that cannot hold one
-// row's transfer is refused by validate(), naming both properties.
-TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
-  for (const std::string& preset : presetNames()) EXPECT_EQ(ConfigTree::forPreset(preset).config().dram.trefi_ns, 0.0);
+// DRAM refresh is on in both presets with their memories' values (igpu DDR3
+// JEDEC: 7.8 us, 260 ns for 4 Gb; dgpu GDDR5: 1.9 us, 110 ns, CONFIG.md); a
+// refresh gap that cannot hold an activate, CL and one burst is refused by
+// validate(), naming both properties.
+TEST(ConfigTree, DramRefreshIsOnAndValidated) {
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trefi_ns, 7800.0);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trfc_ns, 260.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trefi_ns, 1900.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trfc_ns, 110.0);
   ConfigTree t = ConfigTree::forPreset("igpu");
-  t.set("dram.trefi_ns", "7800");
-  t.set("dram.trfc_ns", "350");
-  EXPECT_NO_THROW(t.validate());
-  t.set("dram.trefi_ns", "1000");
+  t.set("dram.trefi_ns", "300");
+  EXPECT_NO_THROW(t.validate());  // 40 ns left: an activate and CL (27.5 ns) and a burst (5 ns)
+  t.set("dram.trefi_ns", "290");
   std::string e = errorOf([&] { t.validate(); });
-  EXPECT_NE(e.find("dram.trefi_ns (1000 ns) minus dram.trfc_ns (350 ns) must be at least the longest transfer booked "
-                   "as one, a row of 8192 bytes on a closed bank (667.5 ns here)"),
+  EXPECT_NE(e.find("dram.trefi_ns (290 ns) minus dram.trfc_ns (260 ns) must hold an activate, CL and one burst "
+                   "of 64 bytes (32.5 ns here)"),
             std::string::npos)
       << e;
   t.set("dram.trfc_ns", "0");
   e = errorOf([&] { t.validate(); });
   EXPECT_NE(e.find("dram.trefi_ns > 0 needs dram.trfc_ns > 0"), std::string::npos) << e;
+  t.set("dram.trefi_ns", "0");  // off
+  EXPECT_NO_THROW(t.validate());
+}
+
+// The write queue's watermarks out of order are refused by validate(), one
+// line each naming the parameters and the rule; sizes of 0 and unknown
+// schedulers by their range.
+TEST(ConfigTree, DramControllerSettingsAreValidated) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.write_low", "56");  // = write_high
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_low (56) >= dram.write_high (56): the low watermark must be below the high one"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_low", "32");
+  t.set("dram.write_high", "80");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_high (80) > dram.write_queue (64): the high watermark must fit in the write queue"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_queue", "80");
+  EXPECT_NO_THROW(t.validate());  // the high watermark may be the whole queue
+  e = errorOf([&] { t.set("dram.write_queue", "0"); });
+  EXPECT_EQ(e, "dram.write_queue: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.write_high", "0"); });
+  EXPECT_EQ(e, "dram.write_high: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.queue_depth", "0"); });
+  EXPECT_EQ(e, "dram.queue_depth: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.scheduler", "fifo"); });
+  EXPECT_EQ(e, "dram.scheduler: 'fifo' is not a known value; expected one of fcfs | frfcfs");
 }
 
 TEST(ConfigTree, PresetNames) {
