@@ -52,7 +52,7 @@ l2-latency-200|--set l2.hit_latency=200
 l2-sectors-32|--set l2.sector_bytes=32 --set l3.sector_bytes=32
 adaptive-fp32-4-partitions|--algo adaptive --format fp32 --set partitions.count=4
 abuffer|--algo abuffer
-quad-unordered-end-of-shader|--set lock.granularity=quad --set lock.ordered=false --set lock.release=end_of_shader
+quad-end-of-shader|--set lock.granularity=quad --set lock.release=end_of_shader
 1-partition-capacity-32|--set partitions.count=1 --set lock.capacity=32
 skips-off|--set skip.early_depth=false --set skip.fast_clear=false --set skip.lazy_merge=false --set skip.idle_cycles=false
 wboit-fp16-no-hiz|--algo wboit --format fp16 --set early_depth.hierarchical=false --set alu.blends_per_clock=1 --set input.fragments_per_clock=3

@@ -31,7 +31,8 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
   }
   const unsigned n = setup.geo->partitions;
   for (unsigned i = 0; i < n; ++i) {
-    parts_.push_back(std::make_unique<RopPartition>(fmt::format("partition{}", i).c_str(), i, setup, dram_.entry()));
+    parts_.push_back(std::make_unique<RopPartition>(fmt::format("partition{}", i).c_str(), i, setup, dram_.entry(),
+                                                    dram_.memory()));
     parts_.back()->dram.bind(dram_.target);  // multi-passthrough: one binding per partition
     done_list_ |= parts_.back()->doneEvent();
   }

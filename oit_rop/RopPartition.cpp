@@ -21,7 +21,7 @@ uint8_t dummy_data[1];
 }  // namespace
 
 RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup,
-                           MemoryPort& shared)
+                           MemoryPort& shared, MemorySystem& memory)
     : sc_module(name),
       dram("dram"),
       id_(id),
@@ -41,13 +41,16 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
       tok_(cfg_.lock.capacity),
       cache_q_(256),
-      tail_q_(256) {
+      tail_q_(256),
+      memory_(memory) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
   tile_mask_ = (1u << geo_.tile_shift) - 1;
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
   for (unsigned o = 0; o < model::kOutcomeCount; ++o)
     rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
+  if (front_.defersInserts())
+    rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
   payload_.set_data_ptr(dummy_data);
   node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
@@ -312,9 +315,10 @@ void RopPartition::resolvePhase() {
     }
     advance(next, true);
   }
-  // The frame ends when the last posted write reached DRAM.
+  // The frame ends when the last posted write reached DRAM: the DRAM
+  // controller writes what its write queues still hold (MEMORY.md).
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-  const Cycle end = std::max(now_, last_write_done_);
+  const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);

@@ -22,6 +22,7 @@
 
 #include "oit_rop/stages/BlendAlu.hpp"
 #include "oit_rop/memory/ArrayLayout.hpp"
+#include "oit_rop/stages/BlendArrayRmw.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/stages/EarlyDepth.hpp"
@@ -73,7 +74,10 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
 
   SC_HAS_PROCESS(RopPartition);
   // `shared`: the first shared memory level (l2, else DRAM), for the cache's fills and write-backs.
-  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemoryPort& shared);
+  // `shared`: the first level below the ROP cache (l2, else DRAM); `memory`:
+  // the DRAM controller, whose write queues the partition drains at its end.
+  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemoryPort& shared,
+               MemorySystem& memory);
   ~RopPartition() override;
 
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
@@ -91,6 +95,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   const BlendArrayCache& cache() const { return cache_; }
   const EarlyDepth& earlyDepth() const { return early_; }
   const BlendAlu& alu() const { return alu_; }
+  // lock.mode unordered / none: the inserts this partition made (nullptr when ordered).
+  const BlendArrayRmw* rmw() const { return rmw_.get(); }
 
  private:
   // The engines move fragments through this partition's stages and time.
@@ -202,6 +208,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   PixelLock lock_;
   BlendArrayCache cache_;
   BlendAlu alu_;
+  std::unique_ptr<BlendArrayRmw> rmw_;  // lock.mode unordered / none: inserts at lock entry
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
@@ -222,6 +229,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
   Cycle last_write_done_ = 0;
+  MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
   // The transparent passes' engine: one of the two (sim.engine).
   std::unique_ptr<CycleEngine> cycle_;

@@ -2,7 +2,7 @@
 // so the tree and the struct cannot drift apart silently (tests/oit_rop/
 // test_config.cpp counts each section's fields against the registry).
 #include "oit_rop/config/ConfigTree.hpp"
-#include "oit_rop/memory/MemorySystem.hpp"
+#include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
 
 #include <fmt/format.h>
@@ -162,8 +162,11 @@ const std::vector<Property>& registry() {
               "scoreboard entries per partition: fragments between issue and lock release"),
       enumeration("lock.granularity", &R::lock, &LockConfig::granularity, {"pixel", "quad", "tile"},
                   "interlock scope: one pixel, a 2x2 quad or a whole screen tile"),
-      boolean("lock.ordered", &R::lock, &LockConfig::ordered,
-              "admit overlapping fragments in submission order (ROV); false = unordered interlock"),
+      enumeration("lock.mode", &R::lock, &LockConfig::mode, {"ordered", "unordered", "none"},
+                  "ordered: a lock address's fragments enter in submission order (ROV, PixelSync), the image is "
+                  "the functional model's; unordered: one at a time in the order they reach the lock, the image "
+                  "follows that order; none: no interlock, racing read-modify-writes lose updates (counted); "
+                  "unordered and none need sim.engine=cycle (DESIGN.md)"),
       boolean("lock.per_primitive", &R::lock, &LockConfig::per_primitive,
               "quad/tile granularity: the fragments of one primitive take the lock together (they never overlap "
               "each other); false = each waits for every older fragment of its quad/tile (an upper bound)"),
@@ -239,6 +242,11 @@ const std::vector<Property>& registry() {
       integer("dram.trp", &R::dram, &DramConfig::trp, 1, 255, "tCK", "precharge time"),
       integer("dram.tras", &R::dram, &DramConfig::tras, 0, 255, "tCK",
               "activate to precharge: a row stays open at least this long (0 = no limit)"),
+      integer("dram.twtr", &R::dram, &DramConfig::twtr, 0, 255, "tCK",
+              "write-to-read turnaround: end of write data to the next read command on the channel; the read's "
+              "data follows CL later, so the bus idles tWTR + CL at each switch from writes to reads"),
+      integer("dram.trtw", &R::dram, &DramConfig::trtw, 0, 255, "tCK",
+              "read-to-write turnaround: idle data bus between read data and the next write data"),
       integer("dram.banks", &R::dram, &DramConfig::banks, 1, 256, "", "banks per channel"),
       integer("dram.row_bytes", &R::dram, &DramConfig::row_bytes, 64, 1u << 20, "bytes",
               "row-buffer size per bank (across the channel's chips)", true),
@@ -246,7 +254,9 @@ const std::vector<Property>& registry() {
               "access granularity (one burst)", true),
       integer("dram.interleave_bytes", &R::dram, &DramConfig::interleave_bytes, 8, 1u << 20, "bytes",
               "consecutive bytes on one channel before the next", true),
-      boolean("dram.open_row", &R::dram, &DramConfig::open_row, "keep rows open: row hits pay CL only"),
+      boolean("dram.open_row", &R::dram, &DramConfig::open_row,
+              "keep rows open: row hits pay CL only; false = closed page: one activate per request's run of "
+              "bursts in a row, auto-precharge after it"),
       boolean("dram.bank_hash", &R::dram, &DramConfig::bank_hash,
               "bank = bank bits XOR every bank-sized group of row bits (permutation interleaving), so "
               "streams in far-apart regions fall in different banks; false = the plain row-bank-column map"),
@@ -257,6 +267,21 @@ const std::vector<Property>& registry() {
            "refresh"),
       real("dram.trfc_ns", &R::dram, &DramConfig::trfc_ns, 0, false, 100000, "ns",
            "refresh cycle time: for tRFC the channel moves no data, and its open rows are closed after it"),
+      enumeration("dram.scheduler", &R::dram, &DramConfig::scheduler, {"fcfs", "frfcfs"},
+                  "read scheduling: fcfs = first come first served; frfcfs = a read whose data can go earlier takes "
+                  "bus time the older reads leave idle (their precharge, activate, turnaround), never moving them"),
+      integer("dram.queue_depth", &R::dram, &DramConfig::queue_depth, 1, 4096, "bursts",
+              "FR-FCFS window per channel: a read may pass at most this many bursts of older requests "
+              "(1 = fcfs)"),
+      integer("dram.write_queue", &R::dram, &DramConfig::write_queue, 1, 4096, "bursts",
+              "posted-write entries per channel: a write burst holds one from its acceptance until its data is on "
+              "the bus; a full queue makes the writer wait"),
+      integer("dram.write_high", &R::dram, &DramConfig::write_high, 1, 4096, "bursts",
+              "high watermark: when this many write bursts wait on a channel, its controller drains writes in a "
+              "batch (reads go first otherwise); write_high = 1, write_low = 0 writes every write at once"),
+      integer("dram.write_low", &R::dram, &DramConfig::write_low, 0, 4095, "bursts",
+              "low watermark: a batch stops once at most this many write bursts wait (whole rows of the oldest "
+              "writes are drained)"),
 
       integer("stats.interval_cycles", &R::stats, &StatsConfig::interval_cycles, 1,
               std::numeric_limits<uint64_t>::max(), "cycles", "time-series sample period"),
@@ -280,9 +305,9 @@ const std::vector<Property>& registry() {
               "requests interleave (1 = lockstep; DESIGN.md)"),
       enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},
                   "cycle: every stage evaluated on each cycle where one can move (the reference); approximate "
-                  "(experimental): each fragment visited once, its stage times computed from the resources' free "
-                  "times; 1.8-2.1x faster on the bench trace, same image and counts, frame cycles -1.1 to "
-                  "+7.0 % on nine of ten test configurations, -26 % with a tiny cache (DESIGN.md)"),
+                  "(experimental, lock.mode=ordered only): each fragment visited once, its stage times computed from the resources' free "
+                  "times; same image and counts; its speed in bench/RESULTS-timing.md, its frame cycles against "
+                  "the cycle engine's in DESIGN.md"),
   };
   return props;
 }
@@ -308,7 +333,20 @@ size_t editDistance(std::string_view a, std::string_view b) {
   return row[b.size()];
 }
 
+// Properties that were replaced: setting one is an error naming its successor.
+struct Retired {
+  std::string_view path, message;
+};
+constexpr Retired kRetired[] = {
+    {"lock.ordered",
+     "'lock.ordered' was replaced by lock.mode (ordered | unordered | none): lock.ordered=true is "
+     "lock.mode=ordered; lock.ordered=false is lock.mode=unordered, whose image now follows the order the "
+     "fragments enter the lock (oit_rop/DESIGN.md)"},
+};
+
 [[noreturn]] void unknownPath(std::string_view path) {
+  for (const Retired& r : kRetired)
+    if (r.path == path) throw std::invalid_argument(std::string(r.message));
   // A group name ("lock") lists its properties.
   std::vector<std::string> members;
   const std::string prefix = std::string(path) + ".";
@@ -436,6 +474,22 @@ Value parseJson(const Property& p, const nlohmann::json& j) {
 }
 
 }  // namespace
+
+std::string approximateLockModeProblem(LockMode mode) {
+  return fmt::format(
+      "lock.mode={} is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
+      "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or lock.mode=ordered",
+      lockModeName(mode));
+}
+
+const char* lockModeName(LockMode m) {
+  switch (m) {
+    case LockMode::Ordered: return "ordered";
+    case LockMode::Unordered: return "unordered";
+    case LockMode::None: return "none";
+  }
+  return "?";
+}
 
 const char* toString(PropertyType t) {
   switch (t) {
@@ -599,8 +653,17 @@ void ConfigTree::validate() const {
                                c.dram.burst_bytes, c.dram.interleave_bytes));
   if (c.dram.burst_bytes > c.dram.row_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.row_bytes ({})", c.dram.burst_bytes, c.dram.row_bytes));
+  // The write queue's watermarks (MEMORY.md): a drain starts at write_high
+  // waiting bursts and stops at or below write_low, within write_queue entries.
+  if (c.dram.write_high > c.dram.write_queue)
+    errs.push_back(fmt::format(
+        "dram.write_high ({}) > dram.write_queue ({}): the high watermark must fit in the write queue",
+        c.dram.write_high, c.dram.write_queue));
+  if (c.dram.write_low >= c.dram.write_high)
+    errs.push_back(fmt::format("dram.write_low ({}) >= dram.write_high ({}): the low watermark must be below the high one",
+                               c.dram.write_low, c.dram.write_high));
   if (c.dram.trefi_ns > 0 && c.clock.core_mhz > 0 && c.dram.channel_gbps > 0 && c.dram.tck_ns > 0) {
-    const std::string problem = MemorySystem::refreshProblem(c.dram, c.clock.core_mhz);
+    const std::string problem = DramTimings::refreshProblem(c.dram, c.clock.core_mhz);
     if (!problem.empty()) errs.push_back(problem);
   }
   if (c.alu.fp32_rate > c.alu.fp16_rate)
@@ -623,6 +686,10 @@ void ConfigTree::validate() const {
         "partitions.count ({}) at clock.core_mhz ({} MHz): partition resume offsets of up to {} ps do not fit in half "
         "a {:.1f} ps cycle; use fewer partitions or a slower clock",
         c.partitions.count, c.clock.core_mhz, c.partitions.count, 1e6 / c.clock.core_mhz));
+  // The approximate engine visits fragments in submission order and applies
+  // no insert out of that order (DESIGN.md): it refuses what it cannot model.
+  if (c.sim.engine == SimEngine::Approximate && c.lock.mode != LockMode::Ordered)
+    errs.push_back(approximateLockModeProblem(c.lock.mode));
   // Single-field limits hold by construction via set(); recheck in case the
   // struct was edited directly (a programmatic caller).
   for (const auto& p : registry()) {
@@ -633,7 +700,7 @@ void ConfigTree::validate() const {
       errs.push_back(e.what());
     }
   }
-  // One violation: one line; several: one line each under the heading.
+  // One problem is one line; several are listed one per line.
   if (errs.size() == 1) throw std::invalid_argument(fmt::format("invalid configuration (preset {}): {}", c.preset, errs[0]));
   if (!errs.empty())
     throw std::invalid_argument(fmt::format("invalid configuration (preset {}):\n  {}", c.preset,

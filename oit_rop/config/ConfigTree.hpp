@@ -88,6 +88,12 @@ ConfigTree resolveTree(const std::string& preset, const std::string& config_file
 RopConfig resolveConfig(const std::string& preset, const std::string& config_file,
                         const std::vector<std::string>& sets);
 
+// lock.mode's value as the property spells it ("ordered", "unordered", "none").
+const char* lockModeName(LockMode mode);
+// The one-line refusal of a lock.mode other than ordered on sim.engine=approximate
+// (validate() and runTiming() both refuse it).
+std::string approximateLockModeProblem(LockMode mode);
+
 // Markdown table of every property for all presets side by side (CONFIG.md).
 std::string presetTableMarkdown();
 

@@ -68,6 +68,10 @@ RopConfig titanXMaxwell() {
   c.dram.trcd = 24;
   c.dram.trp = 24;
   c.dram.tras = 56;
+  c.dram.twtr = 8;  // tWTR 5 ns (Ramulator's GDDR5 speed table) at tCK 0.667 ns
+  c.dram.trtw = 2;  // RD->WR = CL + BL/4 + 2 - WL: 2 tCK of idle data bus
+  c.dram.trefi_ns = 1900.0;  // 32 ms / 16,384 refresh commands (4 Gb GDDR5, as on the GTX 980)
+  c.dram.trfc_ns = 110.0;    // no GDDR5 datasheet at hand: an 8 Gb GDDR6's 110 ns (CONFIG.md)
   c.dram.banks = 16;
   c.dram.row_bytes = 4096;
   c.dram.burst_bytes = 64;
@@ -110,6 +114,13 @@ RopConfig navi21() {
   c.dram.trcd = 32;
   c.dram.trp = 32;
   c.dram.tras = 74;
+  // GDDR6 16 Gbps, 8 Gb (MEMORY.md, "Refresh"): tWTR 4 ns + 2 tCK; read-to-write
+  // spacing RL + 4 - WL leaves 2 tCK of idle data bus; refresh 32 ms / 16k
+  // commands; tRFCab 110 ns.
+  c.dram.twtr = 10;
+  c.dram.trtw = 2;
+  c.dram.trefi_ns = 1900.0;
+  c.dram.trfc_ns = 110.0;
   c.dram.banks = 16;
   c.dram.row_bytes = 2048;
   c.dram.burst_bytes = 32;  // BL16 x 16 bit
@@ -132,23 +143,25 @@ struct PresetEntry {
   "partitions.tile_width", "partitions.tile_height", "input.latency_min", "input.latency_max",                 \
       "early_depth.latency", "lock.shader_tail", "cache.ways", "cache.miss_queue", "cache.hit_latency",       \
       "alu.base_latency", "alu.row_latency", "alu.fp16_rate", "alu.fp32_rate", "dram.row_bytes",               \
-      "dram.interleave_bytes", "dram.controller_ns"
+      "dram.interleave_bytes", "dram.controller_ns", "dram.write_queue", "dram.write_high", "dram.write_low"
 
 const std::vector<PresetEntry>& presets() {
   static const std::vector<PresetEntry> list = {
       {"iris-pro-5200", irisPro5200,
        {OITSIM_COMMON_ESTIMATES, "input.fragments_per_clock", "lock.capacity", "cache.size_bytes", "cache.line_bytes",
         "l2.ways", "l2.slices", "l2.hit_latency", "l2.bytes_per_clock", "l3.ways", "l3.line_bytes", "l3.hit_latency",
-        "l3.bytes_per_clock"}},
+        "l3.bytes_per_clock", "dram.trfc_ns"}},
       {"titan-x-maxwell", titanXMaxwell,
        {OITSIM_COMMON_ESTIMATES, "input.fragments_per_clock", "lock.capacity", "cache.size_bytes", "cache.line_bytes",
         "cache.sector_bytes", "l2.ways", "l2.line_bytes", "l2.sector_bytes", "l2.hit_latency", "l2.bytes_per_clock",
-        "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras"}},
+        "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.twtr", "dram.trtw", "dram.trefi_ns",
+        "dram.trfc_ns"}},
       {"navi21", navi21,
        {OITSIM_COMMON_ESTIMATES, "partitions.count", "input.fragments_per_clock", "lock.capacity", "cache.size_bytes",
         "cache.line_bytes", "alu.blends_per_clock", "l2.size_bytes", "l2.ways", "l2.line_bytes", "l2.slices", "l2.hit_latency",
         "l2.bytes_per_clock", "l3.ways", "l3.line_bytes", "l3.slices", "l3.hit_latency", "l3.bytes_per_clock",
-        "l3.victim_only", "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.banks"}},
+        "l3.victim_only", "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.banks", "dram.twtr",
+        "dram.trtw", "dram.trfc_ns"}},
   };
   return list;
 }

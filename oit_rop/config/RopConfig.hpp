@@ -12,6 +12,11 @@ namespace oit::rop {
 
 enum class LockGranularity : uint8_t { Pixel, Quad, Tile };  // quad = 2x2 pixels
 enum class LockRelease : uint8_t { EndOfBlend, EndOfShader };
+// What the interlock guarantees (oit_rop/DESIGN.md, "Ordering"): ordered = each
+// lock address's fragments enter in submission order (ROV, PixelSync);
+// unordered = one at a time, in the order the timing model lets them in;
+// none = no interlock, racing read-modify-writes (lost updates counted).
+enum class LockMode : uint8_t { Ordered, Unordered, None };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
@@ -19,6 +24,9 @@ enum class SimEngine : uint8_t { CycleStepped, Approximate };
 // array contiguous, pixels in tile order; row_major = row i of every pixel of
 // the tile contiguous (the extra words form one more row).
 enum class ArrayLayoutKind : uint8_t { PixelMajor, RowMajor };
+// The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
+// = a request whose data can go now may pass older ones (MEMORY.md).
+enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
 
 struct ClockConfig {
   double core_mhz = 1150.0;  // ROP / core clock
@@ -52,7 +60,7 @@ struct EarlyDepthConfig {
 struct LockConfig {
   unsigned capacity = 256;                // scoreboard entries (fragments in flight between issue and release)
   LockGranularity granularity = LockGranularity::Pixel;
-  bool ordered = true;                    // admit in submission order per lock address
+  LockMode mode = LockMode::Ordered;      // ordered, unordered or no interlock
   bool per_primitive = true;              // quad/tile: one primitive's fragments hold the lock together
   LockRelease release = LockRelease::EndOfBlend;
   unsigned shader_tail = 20;              // cycles from end of blend to end of shader (EndOfShader release)
@@ -102,15 +110,22 @@ struct DramConfig {
   double tck_ns = 1.25;             // DRAM clock period
   unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
   unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
+  unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
+  unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
   unsigned banks = 8;
   unsigned row_bytes = 8192;        // row-buffer size per bank
   unsigned burst_bytes = 64;        // access granularity
   unsigned interleave_bytes = 256;  // channel interleave
-  bool open_row = true;             // keep rows open (hits pay CL only)
+  bool open_row = true;             // keep rows open (hits pay CL only); false: closed page
   bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
-  double trefi_ns = 0.0;            // refresh interval per channel (0: no refresh)
-  double trfc_ns = 0.0;             // refresh cycle time: no data moves, rows close
+  double trefi_ns = 7800.0;         // refresh interval per channel (0: no refresh); DDR3, <= 85 C
+  double trfc_ns = 260.0;           // refresh cycle time: no data moves, rows close; DDR3 4 Gb
+  unsigned write_queue = 64;        // posted-write entries (bursts) per channel
+  unsigned write_high = 56;         // waiting write bursts that start a drain
+  unsigned write_low = 32;          // a drain stops at or below this
+  DramScheduler scheduler = DramScheduler::FrFcfs;
+  unsigned queue_depth = 64;        // bursts per channel the FR-FCFS scheduler looks over
   bool operator==(const DramConfig&) const = default;
 };
 

@@ -12,10 +12,16 @@ namespace oit::rop {
 CycleEngine::CycleEngine(RopPartition& partition) : p_(partition) {}
 
 void CycleEngine::run() {
-  while (step()) {
+  if (p_.rmw_) {
+    while (step<true>()) {
+    }
+  } else {
+    while (step<false>()) {
+    }
   }
 }
 
+template <bool Deferred>
 bool CycleEngine::step() {
   RopPartition& p = p_;
   const Cycle now = p.now_;
@@ -26,6 +32,9 @@ bool CycleEngine::step() {
   p.alu_.complete(now, [&](uint32_t t) {
     moved = true;
     const RopPartition::TokenInfo& k = p.tok_[t];
+    if constexpr (Deferred) {
+      if (!(k.flags & InRec::kCulled)) p.rmw_->complete(t);  // none: the write lands
+    }
     p.releaseLines(k.pixel, k.outcome);  // the blend wrote its lines: they may be evicted now
     if (!p.s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
       p.nodeWrite();
@@ -65,7 +74,19 @@ bool CycleEngine::step() {
   bool refused = false;
   while (p.lock_.hasReady() && accepted < p.cache_ports_) {
     const uint32_t t = p.lock_.frontReady();
-    const RopPartition::TokenInfo& k = p.tok_[t];
+    RopPartition::TokenInfo& k = p.tok_[t];
+    if constexpr (Deferred) {
+      // The insert, when the fragment first reaches the cache port. (A refused
+      // access retries with the outcome it has: its lines are not resident, so
+      // no fragment in flight can write its pixel meanwhile.)
+      if (k.flags & InRec::kDeferredInsert) {
+        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, p.tileOf(k.pixel));
+        k.outcome = uint8_t(o);
+        k.rows = p.rows_of_[size_t(o)];
+        k.flags &= uint8_t(~InRec::kDeferredInsert);
+        p.res_.merges_skipped += unsigned((o == model::InsertOutcome::Stored) & p.merge_skip_);
+      }
+    }
     // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
     Cycle r = 0;
     if (!p.acquireGated(now, k.pixel, k.outcome, r)) {
@@ -132,7 +153,15 @@ bool CycleEngine::step() {
     const bool culled = (r.flags & InRec::kCulled) != 0;
     // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
     const uint8_t rows = culled ? 0 : p.rows_of_[r.outcome & 3];
-    p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
+    if constexpr (Deferred) {
+      if (r.flags & InRec::kDeferredInsert) {  // its outcome and rows come at lock entry
+        Fifo<Fragment>& fq = p.front_.deferred(p.id_);
+        p.rmw_->hold(t, fq.front());
+        fq.pop();
+      }
+    } else {
+      p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
+    }
     p.tok_[t] = RopPartition::TokenInfo{r.pixel, r.flags, r.outcome, rows};
     p.shader_.issue(now, t, r.seq, p.pass_);
     q.pop();

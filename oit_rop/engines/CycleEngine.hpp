@@ -5,6 +5,10 @@
 // input -> shader) and records every stage's status (busy, a stall by cause,
 // idle); when nothing can move it jumps to the next cycle at which something
 // can (skip.idle_cycles), the skipped span keeping every status (DESIGN.md).
+// With lock.mode unordered or none (Deferred), a fragment's insert happens
+// when it reaches the cache port out of the lock (BlendArrayRmw::enter) and,
+// for none, its write when its blend completes; ordered runs the loop without
+// those steps (a separate instantiation: its speed is unchanged).
 #pragma once
 
 #include "oit_rop/Types.hpp"
@@ -21,6 +25,7 @@ class CycleEngine {
   void run();
 
  private:
+  template <bool Deferred>
   bool step();  // one cycle; false when every pass drained
   Cycle nextEvent(bool refused, bool sb_full, bool draining);
 

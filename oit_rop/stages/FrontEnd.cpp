@@ -77,10 +77,12 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
       geo_(geo),
       hierarchical_(cfg.early_depth.hierarchical),
       prim_runs_(cfg.lock.per_primitive && cfg.lock.granularity != LockGranularity::Pixel),
+      defer_(cfg.lock.mode != LockMode::Ordered),
       words_(algo.stateWords()),
       passes_(algo.passes()),
       state_(size_t(geo.width) * geo.height * algo.stateWords()),
       queues_(geo.partitions, Fifo<InRec>(1u << 12)),
+      deferred_(geo.partitions, Fifo<Fragment>(defer_ ? 1u << 12 : 2)),
       opaque_per_part_(std::move(opaque_per_partition)) {
   const size_t pixels = size_t(geo.width) * geo.height;
   algo_.clearFrame(state_.data(), pixels);
@@ -91,6 +93,7 @@ FrontEnd::FrontEnd(FragmentSource& src, model::OitAlgorithm& algo, const model::
   hiz_max_.assign(tiles, -kInf);
   landed_.assign(tiles, 0);
   tile_nodes_.assign(algo.bounded() ? 0 : tiles, 0);
+  if (cfg.lock.mode == LockMode::None) updates_.assign(pixels, 0);
   for (uint32_t y = 0; y < geo.height; ++y)
     for (uint32_t x = 0; x < geo.width; ++x) {
       const size_t p = size_t(y) * geo.width + x;
@@ -121,13 +124,34 @@ void FrontEnd::wakeWaiters(unsigned partition) {
   }
 }
 
+FrontEnd::PixelState FrontEnd::pixelState() {
+  return {&algo_, state_.data(), words_, geo_.width, opaque_.depth.data(),
+          tile_nodes_.empty() ? nullptr : tile_nodes_.data(), updates_.empty() ? nullptr : updates_.data()};
+}
+
+void FrontEnd::addOutcomes(unsigned pass, const std::array<uint64_t, model::kOutcomeCount>& outcomes) {
+  auto& out = counts_.pass_outcomes.at(pass);
+  for (unsigned o = 0; o < model::kOutcomeCount; ++o) {
+    out[o] += outcomes[o];
+    counts_.bytes_read += outcomes[o] * algo_.readBytes(pass, model::InsertOutcome(o));
+    counts_.bytes_written += outcomes[o] * algo_.writeBytes(pass, model::InsertOutcome(o));
+  }
+  if (pass == 0) {
+    counts_.stored += outcomes[size_t(model::InsertOutcome::Stored)];
+    counts_.merged += outcomes[size_t(model::InsertOutcome::Merged)];
+    counts_.discarded += outcomes[size_t(model::InsertOutcome::Discarded)];
+  }
+}
+
 // The per-record loop of refill(). Everything it reads or counts is held in
 // locals: algo_.insert() is an opaque virtual call, after which member fields
 // would be reloaded and member counters stored back on every record. First:
 // pass 0, which also counts per draw, the opaque and culled totals and (A-buffer)
 // the nodes stored per tile;
-// Hierarchical: early_depth.hierarchical (a test per record less).
-template <bool First, bool Hierarchical>
+// Hierarchical: early_depth.hierarchical (a test per record less);
+// Defer: lock.mode unordered / none, the fragment goes to its partition's
+// deferred() queue uninserted (the partition inserts it at lock entry).
+template <bool First, bool Hierarchical, bool Defer>
 void FrontEnd::route(std::span<const Fragment> batch) {
   model::OitAlgorithm& algo = algo_;
   const model::OitAlgorithm::InsertFn insert = algo.insertFn();
@@ -146,6 +170,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   const float* const hiz_max = hiz_max_.data();
   uint32_t* const tile_nodes = tile_nodes_.empty() ? nullptr : tile_nodes_.data();
   Fifo<InRec>* const queues = queues_.data();
+  Fifo<Fragment>* const deferred = deferred_.data();
   uint32_t* const state = state_.data();
   const float* const opaque_z = opaque_.depth.data();
   std::array<uint64_t, model::kOutcomeCount> outcomes{};
@@ -176,9 +201,11 @@ void FrontEnd::route(std::span<const Fragment> batch) {
     if (i + kPrefetchAhead < n) {
       const Fragment& a = batch[i + kPrefetchAhead];
       const size_t ap = size_t(a.y) * width + a.x;
-      const char* line = reinterpret_cast<const char*>(state + ap * words);
-      __builtin_prefetch(line, 1);
-      if (pixel_bytes > 64) __builtin_prefetch(line + pixel_bytes - 1, 1);
+      if constexpr (!Defer) {  // (deferred: the partition touches the state, later)
+        const char* line = reinterpret_cast<const char*>(state + ap * words);
+        __builtin_prefetch(line, 1);
+        if (pixel_bytes > 64) __builtin_prefetch(line + pixel_bytes - 1, 1);
+      }
       __builtin_prefetch(opaque_z + ap);
     }
     const Fragment& f = batch[i];
@@ -215,6 +242,13 @@ void FrontEnd::route(std::span<const Fragment> batch) {
         ++run.fragments;
         ++run.culled;
       }
+    } else if constexpr (Defer) {
+      r.flags |= InRec::kDeferredInsert;
+      deferred[owner[tile]].push(f);
+      if constexpr (First) {
+        ++run.fragments;
+        ++run.inserted;
+      }
     } else {
       ctx.opaque_z = oz;
       const model::InsertOutcome o = insert(algo, state + size_t(pixel) * words, f, pass, ctx);
@@ -233,10 +267,17 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   run_prim_ = run_prim;
   run_start_ = run_start;
   index_ += n;
-  auto& pass_outcomes = counts_.pass_outcomes[pass];
-  for (unsigned o = 0; o < model::kOutcomeCount; ++o) pass_outcomes[o] += outcomes[o];
+  if constexpr (!Defer) addOutcomes(pass, outcomes);
   counts_.opaque += opaque;
   counts_.culled += culled;
+}
+
+template <bool First>
+void FrontEnd::routeBatch(std::span<const Fragment> batch) {
+  if (defer_)
+    hierarchical_ ? route<First, true, true>(batch) : route<First, false, true>(batch);
+  else
+    hierarchical_ ? route<First, true, false>(batch) : route<First, false, false>(batch);
 }
 
 void FrontEnd::refill() {
@@ -249,17 +290,7 @@ void FrontEnd::refill() {
   if (batch.empty()) {
     // End of pass: every partition drains before its next pass (or resolve).
     for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0});
-    auto& out = counts_.pass_outcomes[pass_];
-    for (unsigned o = 0; o < model::kOutcomeCount; ++o) {
-      counts_.bytes_read += out[o] * algo_.readBytes(pass_, model::InsertOutcome(o));
-      counts_.bytes_written += out[o] * algo_.writeBytes(pass_, model::InsertOutcome(o));
-    }
-    if (pass_ == 0) {
-      counts_.fragments_in = index_;
-      counts_.stored = out[size_t(model::InsertOutcome::Stored)];
-      counts_.merged = out[size_t(model::InsertOutcome::Merged)];
-      counts_.discarded = out[size_t(model::InsertOutcome::Discarded)];
-    }
+    if (pass_ == 0) counts_.fragments_in = index_;
     if (progress_) progress_(double(pass_ + 1) / passes_, std::string(algo_.passName(pass_)));
     if (++pass_ < passes_) {
       src_.rewind();
@@ -273,9 +304,9 @@ void FrontEnd::refill() {
     return;
   }
   if (pass_ == 0)
-    hierarchical_ ? route<true, true>(batch) : route<true, false>(batch);
+    routeBatch<true>(batch);
   else
-    hierarchical_ ? route<false, true>(batch) : route<false, false>(batch);
+    routeBatch<false>(batch);
   if (progress_ && index_ >= next_progress_) {
     next_progress_ = index_ + kProgressRecords;
     const uint64_t total = std::max<uint64_t>(1, src_.header().fragment_count);

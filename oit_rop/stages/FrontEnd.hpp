@@ -1,12 +1,16 @@
 // The ROP front end: reads the trace in batches, classifies and routes every
 // fragment to the partition that owns its screen tile, and runs the
 // functional model on the way ("functional decides what, timing decides
-// when"): the early-depth cull decision (z >= final opaque depth) and the
-// algorithm's insert() are made here, in global submission order, pass by
-// pass, on the full-screen per-pixel state. The InsertOutcome travels with the
-// fragment's record and decides its timing cost downstream. A partition pulls
-// a batch when its input runs dry; a partition with a long backlog holds the
-// others back (high watermark), so memory stays bounded.
+// when"): the early-depth cull decision (z >= final opaque depth) and, with
+// lock.mode = ordered, the algorithm's insert() are made here, in global
+// submission order, pass by pass, on the full-screen per-pixel state. The
+// InsertOutcome travels with the fragment's record and decides its timing cost
+// downstream. With lock.mode = unordered or none the order of the inserts is
+// the timing model's: the front end routes the fragment itself beside its
+// record (deferred(), only in those modes) and the partition inserts it when
+// it enters its critical section (BlendArrayRmw). A partition pulls a batch
+// when its input runs dry; a partition with a long backlog holds the others
+// back (high watermark), so memory stays bounded.
 #pragma once
 
 #include <systemc>
@@ -67,12 +71,15 @@ struct FrameGeometry {
 
 // One routed fragment (16 bytes; culled and inserted fragments alike).
 struct InRec {
-  enum Flags : uint8_t { kCulled = 1, kNeedsDepthRead = 2, kPassEnd = 4 };
+  // kDeferredInsert: not inserted yet (lock.mode unordered / none, not culled):
+  // its outcome is decided when it enters the lock, its Fragment travels in the
+  // partition's deferred() queue.
+  enum Flags : uint8_t { kCulled = 1, kNeedsDepthRead = 2, kPassEnd = 4, kDeferredInsert = 8 };
   uint32_t lock;    // lock address in its partition (FrameGeometry::lockAddress)
   uint32_t pixel;   // in tile order (FrameGeometry::tiledPixel): tile = pixel >> tile_shift
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;
-  // model::InsertOutcome; kCulledKind for a culled fragment (no insert), so
+  // model::InsertOutcome (0 while kDeferredInsert); kCulledKind for a culled fragment (no insert), so
   // that `outcome` is the fragment's kind (culled x 4 + outcome), the index
   // of the approximate engine's per-kind tables.
   uint8_t outcome;
@@ -92,6 +99,24 @@ class FrontEnd {
            const RopConfig& cfg);
 
   Fifo<InRec>& queue(unsigned partition) { return queues_[partition]; }
+  // lock.mode unordered / none: the fragments of the partition's
+  // kDeferredInsert records, in the same order (empty otherwise).
+  Fifo<Fragment>& deferred(unsigned partition) { return deferred_[partition]; }
+  bool defersInserts() const { return defer_; }
+  // The per-pixel state the deferred inserts read and write (BlendArrayRmw).
+  struct PixelState {
+    model::OitAlgorithm* algo;
+    uint32_t* words;          // width x height x words_per_pixel
+    unsigned words_per_pixel;
+    uint32_t width;
+    const float* opaque_z;    // final opaque depth per pixel
+    uint32_t* tile_nodes;     // A-buffer: nodes stored per tile (nullptr when bounded)
+    uint32_t* updates;        // lock.mode = none: per pixel, the updates its array holds (else nullptr)
+  };
+  PixelState pixelState();
+  // Outcomes of pass `pass` decided outside the route (deferred inserts):
+  // added to counts() with their state traffic, as the route adds its own.
+  void addOutcomes(unsigned pass, const std::array<uint64_t, model::kOutcomeCount>& outcomes);
   bool exhausted() const { return exhausted_; }
   // False while some partition's backlog is above the high watermark.
   bool canRefill() const;
@@ -124,8 +149,10 @@ class FrontEnd {
 
  private:
   void wakeWaiters(unsigned partition);
-  template <bool First, bool Hierarchical>
+  template <bool First, bool Hierarchical, bool Defer>
   void route(std::span<const Fragment> batch);  // refill()'s per-record loop
+  template <bool First>
+  void routeBatch(std::span<const Fragment> batch);  // route<First, ...> for the settings
   FragmentSource& src_;
   std::span<const Fragment> pending_;  // the rest of the source's last batch, not yet routed
   model::OitAlgorithm& algo_;
@@ -134,6 +161,7 @@ class FrontEnd {
   const FrameGeometry& geo_;
   bool hierarchical_;
   bool prim_runs_;  // the PixelLock groups owners (lock.per_primitive at quad/tile granularity)
+  bool defer_;      // lock.mode unordered / none: the partitions insert
   unsigned words_, passes_, pass_ = 0;
   bool exhausted_ = false;
   uint64_t index_ = 0, source_reads_ = 0;
@@ -142,9 +170,11 @@ class FrontEnd {
   uint32_t run_draw_ = ~0u, run_prim_ = ~0u, run_start_ = 0;
   model::StateBuffer state_;  // uninitialised until clearFrame, huge pages
   std::vector<Fifo<InRec>> queues_;
+  std::vector<Fifo<Fragment>> deferred_;
   std::vector<float> hiz_min_, hiz_max_;
   std::vector<uint16_t> landed_;
   std::vector<uint32_t> tile_nodes_;
+  std::vector<uint32_t> updates_;  // PixelState::updates
   std::vector<uint64_t> opaque_per_part_;
   std::unordered_map<uint32_t, DrawCounts> per_draw_;
   model::RenderCounts counts_;

@@ -9,7 +9,13 @@
 
 namespace oit::rop {
 
-PixelLock::PixelLock(const LockConfig& cfg) : cfg_(cfg), capacity_(cfg.capacity), ready_(64) {
+PixelLock::PixelLock(const LockConfig& cfg)
+    : cfg_(cfg),
+      capacity_(cfg.capacity),
+      ready_(64),
+      ordered_(cfg.mode == LockMode::Ordered),
+      unordered_(cfg.mode == LockMode::Unordered),
+      unlocked_(cfg.mode == LockMode::None) {
   if (capacity_ == 0 || capacity_ > (1u << 24)) throw std::invalid_argument("lock.capacity must be in [1, 2^24]");
   tok_.resize(capacity_);
   free_.resize(capacity_);
@@ -23,8 +29,8 @@ void PixelLock::grow(uint32_t address) {
   // the frame. calloc: the zero (empty) pages of unused addresses stay untouched.
   const size_t n = std::max<size_t>(1024, std::bit_ceil(size_t(address) + 1));
   auto* slots = static_cast<Slot*>(std::calloc(n, sizeof(Slot)));
-  auto* busy = cfg_.ordered ? nullptr : static_cast<Busy*>(std::calloc(n, sizeof(Busy)));
-  if (!slots || (!cfg_.ordered && !busy)) {
+  auto* busy = unordered_ ? static_cast<Busy*>(std::calloc(n, sizeof(Busy))) : nullptr;
+  if (!slots || (unordered_ && !busy)) {
     std::free(slots);
     std::free(busy);
     throw std::bad_alloc();

@@ -6,8 +6,9 @@
 //  - ordered:   every older fragment of the same lock address has released
 //               (strict submission order per address);
 //  - unordered: no other fragment of the address is inside (mutual exclusion);
-//               entering while an older one is still in flight is counted as
-//               an out-of-order entry.
+//  - none:      at once (no interlock: the read-modify-writes may overlap).
+// Entering while an older fragment of the address is still in flight is
+// counted as an out-of-order entry (unordered and none).
 // The lock address names the pixel, its 2x2 quad or its tile (lock.granularity),
 // numbered among the partition's own (FrameGeometry::lockAddress).
 // Every fragment has an owner: at quad or tile granularity with
@@ -117,6 +118,7 @@ class PixelLock {
   Fifo<uint32_t> ready_;
   uint32_t waiting_ = 0;
   bool grouped_ = false;
+  bool ordered_, unordered_, unlocked_;  // lock.mode: ordered, unordered, none
   LockStats stats_;
 };
 
@@ -165,8 +167,10 @@ inline void PixelLock::arrive(Cycle now, uint32_t t) {
   // Ordered: eligible when every older fragment of the address in flight has
   // its owner (front: no lookup needed).
   bool eligible;
-  if (cfg_.ordered) {
+  if (ordered_) {
     eligible = k.front;
+  } else if (unlocked_) {
+    eligible = true;
   } else {
     Busy& b = busy_[k.address];
     eligible = b.count == 0 || b.owner == k.owner;
@@ -218,7 +222,7 @@ inline void PixelLock::unlink(Cycle now, uint32_t t) {
   for (int32_t i = n; i >= 0 && tok_[size_t(i)].owner == o; i = tok_[size_t(i)].next) {
     Token& f = tok_[size_t(i)];
     f.front = true;
-    if (cfg_.ordered && f.state == State::Waiting) admit(now, uint32_t(i));
+    if (ordered_ && f.state == State::Waiting) admit(now, uint32_t(i));
   }
 }
 
@@ -249,7 +253,7 @@ inline void PixelLock::release(Cycle now, uint32_t t) {
   const uint32_t a = tok_[t].address;
   unlink(now, t);
   // Unordered: the last admitted fragment of the address frees it.
-  if (!cfg_.ordered && --busy_[a].count == 0 && slots_[a].head) wakeUnordered(now, a);
+  if (unordered_ && --busy_[a].count == 0 && slots_[a].head) wakeUnordered(now, a);
 }
 
 }  // namespace oit::rop

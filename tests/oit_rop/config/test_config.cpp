@@ -79,8 +79,8 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 16u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 72u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 23u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 79u);  // 52 + 20 (issue 21's levels) + 7 (its DRAM controller)
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -113,23 +113,58 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_FALSE(get("clock.core_mhz").inferred);
 }
 
-// DRAM refresh is off in both presets; a refresh gap that cannot hold one
-// row's transfer is refused by validate(), naming both properties.
-TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
-  for (const std::string& preset : presetNames()) EXPECT_EQ(ConfigTree::forPreset(preset).config().dram.trefi_ns, 0.0);
+// DRAM refresh is on in both presets with their memories' values (igpu DDR3
+// JEDEC: 7.8 us, 260 ns for 4 Gb; dgpu GDDR5: 1.9 us, 110 ns, CONFIG.md); a
+// refresh gap that cannot hold an activate, CL and one burst is refused by
+// validate(), naming both properties.
+TEST(ConfigTree, DramRefreshIsOnAndValidated) {
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trefi_ns, 7800.0);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trfc_ns, 260.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trefi_ns, 1900.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trfc_ns, 110.0);
   ConfigTree t = ConfigTree::forPreset("igpu");
-  t.set("dram.trefi_ns", "7800");
-  t.set("dram.trfc_ns", "350");
-  EXPECT_NO_THROW(t.validate());
-  t.set("dram.trefi_ns", "1000");
+  t.set("dram.trefi_ns", "300");
+  EXPECT_NO_THROW(t.validate());  // 40 ns left: an activate and CL (27.5 ns) and a burst (5 ns)
+  t.set("dram.trefi_ns", "290");
   std::string e = errorOf([&] { t.validate(); });
-  EXPECT_NE(e.find("dram.trefi_ns (1000 ns) minus dram.trfc_ns (350 ns) must be at least the longest transfer booked "
-                   "as one, a row of 8192 bytes on a closed bank (667.5 ns here)"),
+  EXPECT_NE(e.find("dram.trefi_ns (290 ns) minus dram.trfc_ns (260 ns) must hold an activate, CL and one burst "
+                   "of 64 bytes (32.5 ns here)"),
             std::string::npos)
       << e;
   t.set("dram.trfc_ns", "0");
   e = errorOf([&] { t.validate(); });
   EXPECT_NE(e.find("dram.trefi_ns > 0 needs dram.trfc_ns > 0"), std::string::npos) << e;
+  t.set("dram.trefi_ns", "0");  // off
+  EXPECT_NO_THROW(t.validate());
+}
+
+// The write queue's watermarks out of order are refused by validate(), one
+// line each naming the parameters and the rule; sizes of 0 and unknown
+// schedulers by their range.
+TEST(ConfigTree, DramControllerSettingsAreValidated) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.write_low", "56");  // = write_high
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_low (56) >= dram.write_high (56): the low watermark must be below the high one"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_low", "32");
+  t.set("dram.write_high", "80");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_high (80) > dram.write_queue (64): the high watermark must fit in the write queue"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_queue", "80");
+  EXPECT_NO_THROW(t.validate());  // the high watermark may be the whole queue
+  e = errorOf([&] { t.set("dram.write_queue", "0"); });
+  EXPECT_EQ(e, "dram.write_queue: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.write_high", "0"); });
+  EXPECT_EQ(e, "dram.write_high: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.queue_depth", "0"); });
+  EXPECT_EQ(e, "dram.queue_depth: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.scheduler", "fifo"); });
+  EXPECT_EQ(e, "dram.scheduler: 'fifo' is not a known value; expected one of fcfs | frfcfs");
 }
 
 TEST(ConfigTree, PresetNamesAndAliases) {
@@ -210,7 +245,7 @@ TEST(ConfigTree, SetEachType) {
   t.set("lock.release", "end_of_shader");
   t.set("input.latency_model", "fixed");
   t.set("skip.idle_cycles", "false");
-  t.set("lock.ordered", "off");
+  t.set("lock.mode", "none");
   t.set("dram.channel_gbps", "17.066");
   t.set("dram.channels", " 3 ");
   t.set("cache.size_bytes", "256KiB");
@@ -220,7 +255,7 @@ TEST(ConfigTree, SetEachType) {
   EXPECT_EQ(c.lock.release, LockRelease::EndOfShader);
   EXPECT_EQ(c.input.latency_model, LatencyModel::Fixed);
   EXPECT_FALSE(c.skip.idle_cycles);
-  EXPECT_FALSE(c.lock.ordered);
+  EXPECT_EQ(c.lock.mode, LockMode::None);
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 17.066);
   EXPECT_EQ(c.dram.channels, 3u);
   EXPECT_EQ(c.cache.size_bytes, 262144u);
@@ -242,6 +277,46 @@ TEST(ConfigTree, UnknownPathSuggestsClosest) {
   e = errorOf([&] { t.set("completely.unrelated.thing", "1"); });
   EXPECT_NE(e.find("groups: clock"), std::string::npos) << e;
   EXPECT_EQ(e.find("did you mean"), std::string::npos) << e;
+}
+
+// lock.mode names the interlock; the boolean it replaced (lock.ordered) is
+// refused naming its successor, from --set and from a file alike; an unknown
+// mode lists the three.
+TEST(ConfigTree, LockModeAndTheRetiredOrderedFlag) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_EQ(t.config().lock.mode, LockMode::Ordered);  // the default: the functional model's order
+  for (const auto& [name, mode] : {std::pair{"ordered", LockMode::Ordered}, std::pair{"unordered", LockMode::Unordered},
+                                   std::pair{"none", LockMode::None}}) {
+    t.set("lock.mode", name);
+    EXPECT_EQ(t.config().lock.mode, mode);
+    EXPECT_STREQ(lockModeName(mode), name);
+  }
+  const std::string retired =
+      "'lock.ordered' was replaced by lock.mode (ordered | unordered | none): lock.ordered=true is "
+      "lock.mode=ordered; lock.ordered=false is lock.mode=unordered, whose image now follows the order the fragments "
+      "enter the lock (oit_rop/DESIGN.md)";
+  EXPECT_EQ(errorOf([&] { t.set("lock.ordered", "false"); }), retired);
+  TempFile old("old.json", R"({"lock": {"ordered": false}})");
+  EXPECT_EQ(errorOf([&] { t.loadJson(old.path()); }), old.path() + ": key 'lock/ordered': " + retired);
+  EXPECT_EQ(errorOf([&] { t.set("lock.mode", "sometimes"); }),
+            "lock.mode: 'sometimes' is not a known value; expected one of ordered | unordered | none");
+}
+
+// The approximate engine does not model unordered or unlocked inserts: one
+// line naming both settings, instead of running them as ordered.
+TEST(ConfigTree, ApproximateEngineRefusesLockModesItDoesNotModel) {
+  for (const char* mode : {"unordered", "none"}) {
+    ConfigTree t = ConfigTree::forPreset("igpu");
+    t.set("sim.engine", "approximate");
+    t.set("lock.mode", mode);
+    EXPECT_EQ(errorOf([&] { t.validate(); }),
+              std::string("invalid configuration (preset iris-pro-5200): lock.mode=") + mode +
+                  " is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
+                  "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or "
+                  "lock.mode=ordered");
+    t.set("lock.mode", "ordered");
+    EXPECT_NO_THROW(t.validate());
+  }
 }
 
 TEST(ConfigTree, BadValues) {
@@ -376,7 +451,7 @@ TEST(ConfigTree, CacheGeometry) {
 
 TEST(ConfigTree, JsonNestedAndDotted) {
   TempFile f("nested.json", R"({
-    "lock": {"granularity": "quad", "ordered": false},
+    "lock": {"granularity": "quad", "mode": "unordered"},
     "dram.channels": 4,
     "dram": {"channel_gbps": 20.5},
     "cache": {"size_bytes": "128KiB"},
@@ -387,7 +462,7 @@ TEST(ConfigTree, JsonNestedAndDotted) {
   t.loadJson(f.path());
   const RopConfig& c = t.config();
   EXPECT_EQ(c.lock.granularity, LockGranularity::Quad);
-  EXPECT_FALSE(c.lock.ordered);
+  EXPECT_EQ(c.lock.mode, LockMode::Unordered);
   EXPECT_EQ(c.dram.channels, 4u);
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 20.5);
   EXPECT_EQ(c.cache.size_bytes, 131072u);
