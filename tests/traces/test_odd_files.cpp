@@ -58,7 +58,7 @@ TEST(OddFiles, DeviceAndFolderAsTraceAreRefusedByName) {
   const std::string folder = dir.path("t.csv");
   std::filesystem::create_directory(folder);
   EXPECT_EQ(traceErrorOf([&] { openTrace(folder); }), folder + ": is a directory, not a regular file");
-  EXPECT_EQ(traceErrorOf([&] { openTrace(""); }), ": empty path: expected a file name");
+  EXPECT_EQ(traceErrorOf([&] { openTrace(""); }), "'': expected a trace file, got an empty path");
 }
 
 TEST(OddFiles, InputFileNamesEveryKind) {
