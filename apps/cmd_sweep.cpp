@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -37,6 +38,7 @@
 #include "oit_rop/RepeatedKeys.hpp"
 #include "reports/AtomicFile.hpp"
 #include "reports/JsonReport.hpp"
+#include "traces/InputFile.hpp"
 #include "traces/TempFiles.hpp"
 #include "traces/gen/Scenes.hpp"
 
@@ -309,18 +311,18 @@ except (ValueError, TypeError) as e:
 // parsers would keep the last silently; config files refuse it too), and a top
 // level that is not an object.
 ojson loadSpec(const std::string& path) {
-  if (!fs::exists(path)) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  // A regular file only, opened without blocking (a FIFO would hang).
+  const InputFile in = openInputFile(path);
+  if (!in && in.error == ENOENT) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  if (!in) throw std::invalid_argument("sweep spec " + path + ": " + in.problem);
   const std::string ext = fs::path(path).extension().string();
   const bool yaml = ext == ".yaml" || ext == ".yml";
   std::string text;
   if (yaml) {
     text = yamlToJson(path);
   } else {
-    std::ifstream in(path);
-    if (!in) throw std::invalid_argument("sweep spec " + path + ": cannot open");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    text = ss.str();
+    std::string problem;
+    if (!readAll(in, uint64_t(16) << 20, text, problem)) throw std::invalid_argument("sweep spec " + path + ": " + problem);
   }
   // Repeated keys, named by their path (base.mode, traces[1].gen).
   const auto cb = rop::refuseRepeatedKeys<ojson>(
@@ -343,6 +345,9 @@ ojson loadSpec(const std::string& path) {
                                 (spec.is_array() ? "a list" : spec.is_null() ? "nothing" : "a " + std::string(spec.type_name())));
   return spec;
 }
+
+// Far above any real sweep; a spec beyond it is a mistake (or would take days).
+constexpr size_t kMaxSweepPoints = 100000;
 
 struct TraceEntry {
   size_t index = 0;  // in the spec's traces list
@@ -370,6 +375,7 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     if (t.is_string()) {
       e.path = t.get<std::string>();
     } else if (t.is_object() && t.contains("path")) {
+      if (!t["path"].is_string()) throw std::invalid_argument(where + ".path: expected a trace file path");
       e.path = t["path"].get<std::string>();
     } else if (t.is_object() && t.contains("gen")) {
       if (!t["gen"].is_string()) throw std::invalid_argument(where + ".gen: expected a scene name");
@@ -394,7 +400,10 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     } else {
       throw std::invalid_argument(where + ": expected a path, {\"path\": ...} or {\"gen\": SCENE, ...}");
     }
-    if (t.is_object() && t.contains("name")) e.name = t["name"].get<std::string>();
+    if (t.is_object() && t.contains("name")) {
+      if (!t["name"].is_string()) throw std::invalid_argument(where + ".name: expected a name (a string)");
+      e.name = t["name"].get<std::string>();
+    }
     if (e.gen_args.empty()) {
       if (fs::path(e.path).is_relative()) e.path = (base / e.path).lexically_normal().string();
       if (!fs::exists(e.path)) throw std::invalid_argument(where + ": trace " + e.path + " does not exist");
@@ -461,8 +470,16 @@ std::vector<Point> expand(const ojson& spec, const std::string& specPath, const 
   }
   const std::string exeOut = fs::absolute(out).string();
   std::vector<Point> points;
+  // A bound on the product, checked as it grows (it could overflow): each
+  // point is resolved and planned before anything runs.
   size_t combos = 1;
-  for (const auto& [name, vals] : axes) combos *= vals.size();
+  for (const auto& [name, vals] : axes) {
+    combos *= vals.size();
+    if (combos * traces.size() > kMaxSweepPoints)
+      throw std::invalid_argument(fmt::format(
+          "sweep spec {}: the traces and axes give more than {} points (at axes.{}); split the sweep", specPath,
+          kMaxSweepPoints, name));
+  }
   for (const TraceEntry& t : traces) {
     for (size_t c = 0; c < combos; ++c) {
       Settings s = base;
@@ -908,6 +925,16 @@ void addSweepCommand(CLI::App& app) {
       ->check(CLI::IsMember({"slurm"}));
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
   cmd->callback([a] { runSweep(*a); });
+}
+
+// The fuzzer's entry (tests/fuzz/fuzz_sweep_spec.cpp): what runSweep checks
+// and plans before anything runs or is written.
+std::vector<std::vector<std::string>> planSweep(const std::string& spec_path, const std::string& out) {
+  const ojson spec = loadSpec(spec_path);
+  const fs::path dir = fs::absolute(out);
+  std::vector<std::vector<std::string>> args;
+  for (const Point& p : expand(spec, spec_path, parseTraces(spec, spec_path, dir), dir)) args.push_back(p.args);
+  return args;
 }
 
 }  // namespace oit::cli
