@@ -47,7 +47,7 @@ enum class ReferenceKind { Exact, File, None };
 
 struct RunShape {
   uint32_t width = 0, height = 0;
-  uint64_t fragments = 0;  // fragments an A-buffer may store: records of transparent draws (or all records)
+  uint64_t fragments = 0;  // fragments an A-buffer may store: records of transparent draws, or all records (a bound)
   uint64_t bytes_per_pixel = 0;  // the algorithm's per-pixel state
   uint64_t pool_bytes_per_fragment = 0;  // the A-buffer's node, 0 for the bounded algorithms
   bool timing = false;

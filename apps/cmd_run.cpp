@@ -265,6 +265,9 @@ void runReplay(RunArgs& a) {
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(fmt::format("--vcd {}: {}", a.vcd, e.what()));
     }
+    // The VCD is written under a staged name and renamed at the end: an
+    // earlier run's at the path goes now, as the run's other outputs went.
+    fs::remove(rop::vcdFilePath(a.vcd), ec);
   }
 
   auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
@@ -283,10 +286,11 @@ void runReplay(RunArgs& a) {
                     : a.reference == "none"  ? ReferenceKind::None
                                              : ReferenceKind::File;
   shape.run_is_reference = a.algo == "abuffer";
-  // An A-buffer (under test or as the reference) holds transparent fragments
-  // only: a quick pass counts them (the record count bounds them less tightly).
-  if (shape.pool_bytes_per_fragment > 0 || shape.reference == ReferenceKind::Exact)
-    shape.fragments = transparentFragments(*src);
+  // The A-buffer under test holds transparent fragments only: a quick pass
+  // counts them, for its reservation and the estimate (the record count would
+  // refuse a frame with many opaque ones). The reference's bands need no count
+  // here (they count what reaches them); its estimate takes the record count.
+  if (shape.pool_bytes_per_fragment > 0) shape.fragments = transparentFragments(*src);
   const RunMemoryEstimate mem = estimateRunMemory(shape, residentBytes(), budget.bytes);
   checkRunFitsBudget(mem, budget, a.trace, shape, a.algo);
   if (shape.reference == ReferenceKind::File) checkReferenceFile(a.reference, h.width, h.height);
