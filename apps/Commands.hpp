@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "traces/TraceIO.hpp"
 
@@ -42,11 +41,6 @@ const std::string& commandLine();
 // the folder or the nearest existing part of its path a writable directory.
 // Errors name the option: "--out afile: exists and is not a directory".
 void checkOutputFolder(const std::string& option, const std::string& folder);
-
-// The command lines of a sweep spec's points, after every check `oitsim sweep`
-// makes before it runs anything; throws std::invalid_argument naming what is
-// wrong. Nothing is run or written (the sweep spec fuzzer's entry).
-std::vector<std::vector<std::string>> planSweep(const std::string& spec_path, const std::string& out);
 
 // openTrace with the --width/--height options (0 = not given); a value that
 // differs from the size the trace itself gives is an error naming the option.

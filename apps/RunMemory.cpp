@@ -145,12 +145,14 @@ namespace {
 constexpr uint64_t kReaderBytes = 3 * kMiB;
 // The timing model's tables beyond the per-pixel state it shares with the
 // functional mode (the ordered lock's release table, per-tile cache, depth and
-// HiZ entries, the partitions' queues, SystemC's thread stacks). Measured with
-// --reference none at 1024 x 1024 and 2048 x 2048 (timing minus functional
-// peak): alpha 7.4 and 25.6 MiB (6.1 B per pixel + 1.0 MiB), mlab k=8 12.5 and
-// 36.5 MiB (8.0 B per pixel + 4.1 MiB).
-constexpr uint64_t kTimingBytesPerPixel = 8;
-constexpr uint64_t kTimingBytes = 3 * kMiB;
+// HiZ entries, the partitions' queues, the DRAM controller's queues, SystemC's
+// thread stacks). Measured with --reference none at 1024 x 512 and 2048 x 1024
+// (timing minus functional peak, glass): alpha 4 and 12 MiB (5.3 B per pixel +
+// 1.3 MiB), mlab k=8 7 and 21 MiB (9.3 B per pixel + 2.3 MiB). 7 B per pixel +
+// 2 MiB lies between them; the functional terms' own margin covers mlab's
+// rest (CliReliability.EstimateCoversTheMeasuredPeak).
+constexpr uint64_t kTimingBytesPerPixel = 7;
+constexpr uint64_t kTimingBytes = 2 * kMiB;
 // The exact reference beside its band: the band file's write buffers and one
 // read chunk (FunctionalRendererBands.cpp).
 constexpr uint64_t kBandBuffers = 10 * kMiB;
@@ -185,26 +187,39 @@ RunMemoryEstimate estimateRunMemory(const RunShape& s, uint64_t base, uint64_t b
   // model's own tables.
   uint64_t render = opaque + s.bytes_per_pixel * px + pool + image + kReaderBytes;
   if (s.timing) render += kTimingBytesPerPixel * px + kTimingBytes;
+  // --seeds N: children simulate (each a whole run, in its own process, a
+  // fork of this one) and send back their images, which this process keeps to
+  // the end (and seed 0's once more as the run's own); flicker's sRGB8 codes
+  // (3 B per pixel and image) and its grey image come with the outputs.
+  const uint64_t seed_images = s.seeds * image;
+  if (s.seeds > 0) render = s.seed_processes * render + seed_images + image;
   e.phases.push_back({"render", slack(render)});
 
   // The images compared: luma of both (2 x 8 B per pixel), SSIM's five
-  // horizontal moment planes (5 x 8 B); the PNG/PFM writing after them.
+  // horizontal moment planes (5 x 8 B); then LDR-FLIP (model/Flip.cpp): both
+  // images as sRGB8 (2 x 3 B), seven float scratch planes, five per image
+  // perceived (2 x 5 x 4 B), the error map (4 B, kept for flip.png) and its
+  // sorted copy for the quartiles (4 B); the PNG/PFM writing after them.
   const bool compare = s.reference != ReferenceKind::None;
+  const uint64_t kept = pool + seed_images;
   if (compare) {
-    e.phases.push_back({"metrics", slack(pool + 2 * image + 16 * px + 40 * px)});
-    e.phases.push_back({"outputs", slack(pool + 3 * image + png)});
+    const uint64_t flip_map = 4 * px;
+    e.phases.push_back({"metrics", slack(kept + 2 * image + 16 * px + 40 * px)});
+    e.phases.push_back({"flip", slack(kept + 2 * image + 6 * px + 28 * px + 40 * px + 2 * flip_map)});
+    const uint64_t flicker = s.seeds > 0 ? s.seeds * 3 * px + image : 0;
+    e.phases.push_back({"outputs", slack(kept + 3 * image + flip_map + flicker + png)});
   } else {
-    e.phases.push_back({"outputs", slack(pool + image + png)});
+    e.phases.push_back({"outputs", slack(kept + image + png)});
   }
 
   if (s.reference == ReferenceKind::File) {
     // readPfm holds the file's bytes and the decoded image at once.
-    e.phases.push_back({"reference", slack(pool + image + 2 * image)});
+    e.phases.push_back({"reference", slack(kept + image + 2 * image)});
   } else if (s.reference == ReferenceKind::Exact && !s.run_is_reference) {
     // The run's image, the reference's opaque layer and image, then either the
     // counting pass's per-pixel counts or one band: heads (4 B per pixel) and
     // nodes (24 B per fragment that reaches the A-buffer, at most one per record).
-    const uint64_t fixed = image + opaque + image + kBandBuffers + kReaderBytes;
+    const uint64_t fixed = seed_images + image + opaque + image + kBandBuffers + kReaderBytes;
     uint64_t others = 0;
     for (const MemoryPhase& p : e.phases) others = std::max(others, p.bytes);
     uint64_t band = std::max(others > slack(fixed) ? others - slack(fixed) : 0, kMinReferenceBand);
@@ -222,12 +237,13 @@ void checkRunFitsBudget(const RunMemoryEstimate& e, const MemoryBudget& budget, 
   if (e.peak() <= budget.bytes) return;
   const MemoryPhase& p = e.peakPhase();
   std::string hint;
-  if (s.reference != ReferenceKind::None && (p.name == "metrics" || p.name == "reference" || p.name == "outputs"))
+  if (s.reference != ReferenceKind::None && p.name != "render" && s.seeds == 0)
     hint = "; --reference none skips the reference and the metrics";
   throw std::invalid_argument(fmt::format(
-      "{}: a {} x {} frame with {} needs about {} at its peak ({}), more than the memory budget of {} ({}){}; "
+      "{}: a {} x {} frame with {}{} needs about {} at its peak ({}), more than the memory budget of {} ({}){}; "
       "nothing was run",
-      trace, s.width, s.height, algo, gib(e.peak()), p.name, gib(budget.bytes), budget.source, hint));
+      trace, s.width, s.height, algo, s.seeds > 0 ? fmt::format(" and {} seeds' images", s.seeds) : "",
+      gib(e.peak()), p.name, gib(budget.bytes), budget.source, hint));
 }
 
 std::string outOfMemoryMessage(const RunMemoryEstimate& e, const MemoryBudget& budget, const std::string& trace,

@@ -53,6 +53,8 @@ struct RunShape {
   bool timing = false;
   ReferenceKind reference = ReferenceKind::Exact;
   bool run_is_reference = false;  // --algo abuffer: the run is its own reference
+  unsigned seeds = 0;           // --seeds N: the parent keeps every seed's image (0: one run, in this process)
+  unsigned seed_processes = 0;  // the children that simulate at once (each a whole run)
 };
 
 struct MemoryPhase {

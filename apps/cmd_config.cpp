@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "apps/Commands.hpp"
-#include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 
 namespace oit::cli {
 namespace {

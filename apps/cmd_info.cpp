@@ -85,6 +85,11 @@ void runInfo(const InfoArgs& a) {
   if (a.heatmap_given) {  // before the trace is read
     checkOutputFile("--heatmap", a.heatmap);
     checkNotInput("--heatmap", a.heatmap, "trace", a.trace);
+    // It writes PFM only: a .png (or any other) name would hold a PFM.
+    if (std::filesystem::path(a.heatmap).extension() != ".pfm")
+      throw std::invalid_argument(fmt::format(
+          "--heatmap {}: expected a file name ending in .pfm (the heatmap is a PFM image; no other format)",
+          a.heatmap));
   }
   auto src = openTraceWithSize(a.trace, a.width, a.height);
   // Per-pixel depth-complexity counts: transparent, opaque and all (3 x u32).
@@ -160,7 +165,8 @@ void addInfoCommand(CLI::App& app) {
       cmd->add_option("--height", args->height, "Frame height of a CSV trace without a height comment (1..65535)");
   cmd->add_flag("--json", args->json, "Print the statistics as JSON");
   CLI::Option* heatmap = cmd->add_option("--heatmap", args->heatmap,
-                                         "Also write transparent fragments per pixel (depth complexity) as a PFM file");
+                                         "Also write transparent fragments per pixel (depth complexity) as a PFM file "
+                                         "(FILE must end in .pfm)");
   cmd->callback([args, heatmap, width, height] {
     args->width_given = width->count() > 0;
     args->height_given = height->count() > 0;

@@ -1,8 +1,10 @@
-// oitsim report DIR: one self-contained HTML page (DIR/report.html) of a sweep:
-// the table of points, Pareto plots, image strips, stall breakdowns, depth
-// complexity, simulator speed modes. The tables are rebuilt from the plan and
-// the points first (so points run by a Slurm array merge the same way), then
-// reports/make_report.py (Debian's python3-matplotlib) draws the page.
+// oitsim report DIR: one HTML page (DIR/report.html) of a sweep, per scene and
+// hardware configuration: the bottleneck, cost against error, curves against k,
+// memory, the image grid, depth complexity; speed modes; every point
+// (reports/SWEEP.md, "The report"). The points are merged first
+// (reports/SweepMerge.hpp: points run by a Slurm array merge the same way) and
+// the merge printed, then reports/make_report.py (Debian's python3-matplotlib)
+// draws the page.
 #include <fmt/core.h>
 
 #include <cerrno>
@@ -14,11 +16,11 @@
 #include <unistd.h>
 
 #include "apps/Commands.hpp"
+#include "reports/SweepMerge.hpp"
 
 namespace oit::cli {
 
 // Defined in cmd_sweep.cpp.
-int collectSweep(const std::string& dir, bool quiet);
 std::string selfExecutable();
 
 namespace {
@@ -67,7 +69,10 @@ void runReport(const ReportArgs& a) {
   const std::string out = a.out.empty() ? (dir / "report.html").string() : fs::absolute(a.out).string();
   checkWritable(out, !a.out.empty());
   if (fs::exists(dir / "plan.json")) {
-    collectSweep(dir.string(), true);  // failed points are listed in the page, not an error here
+    // Failed and missing points are listed here and in the page, not an error.
+    const sweep::MergeSummary sum = sweep::mergeSweep(dir);
+    if (!a.quiet) fmt::print("{}", sweep::mergeSummaryText(sum));
+    std::fflush(stdout);
   } else if (!fs::exists(dir / "results.json")) {
     throw std::invalid_argument("report: " + dir.string() + " has neither plan.json nor results.json (run `oitsim sweep` first)");
   }
@@ -93,10 +98,12 @@ void runReport(const ReportArgs& a) {
 
 void addReportCommand(CLI::App& app) {
   auto a = std::make_shared<ReportArgs>();
-  CLI::App* cmd = app.add_subcommand("report", "Make DIR/report.html (self-contained) from a sweep folder");
+  CLI::App* cmd = app.add_subcommand(
+      "report", "Merge a sweep folder's points and make DIR/report.html (plots and thumbnails embedded; full-size "
+                "images linked from DIR/points)");
   cmd->add_option("dir", a->dir, "Folder written by `oitsim sweep`")->required();
   cmd->add_option("--out,-o", a->out, "HTML file to write (default DIR/report.html)");
-  cmd->add_flag("--quiet,-q", a->quiet, "No summary");
+  cmd->add_flag("--quiet,-q", a->quiet, "No merge summary, progress or summary");
   cmd->callback([a] { runReport(*a); });
 }
 

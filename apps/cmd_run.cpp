@@ -1,7 +1,8 @@
 // oitsim run: replay a trace through an OIT algorithm and write the image, the
 // A-buffer reference, the enhanced difference and report.json. The timing mode
 // (default) replays it through the SystemC ROP and adds cycles, stalls, DRAM
-// traffic and footprint; its image is the functional one by construction.
+// traffic and footprint; its image is the functional one by construction with
+// lock.mode=ordered (image.order). --seeds N: apps/RunSeeds.hpp.
 //
 // Nothing is written until the whole run has succeeded: a bad trace (which the
 // reader reports with file, byte offset, record and field) leaves no report.
@@ -10,6 +11,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <sstream>
@@ -18,11 +20,15 @@
 #include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "apps/RunMemory.hpp"
+#include "apps/RunSeeds.hpp"
 #include "apps/StagedOutputs.hpp"
 #include "apps/TraceOptions.hpp"
+#include "model/AlgorithmSettings.hpp"
+#include "model/Flip.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
-#include "oit_rop/ConfigTree.hpp"
+#include "oit_rop/ChildRuns.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
 #include "traces/InputFile.hpp"
@@ -48,9 +54,12 @@ struct RunArgs {
   bool width_given = false, height_given = false;
   bool vcd_given = false;  // --vcd on the command line (an empty path is an error, not "no VCD")
   AlgorithmParams params;
+  double ppd = model::kFlipDefaultPpd;  // FLIP's pixels per degree
   std::vector<float> background{0.0f, 0.0f, 0.0f};
   bool quiet = false;
   std::string command_line;  // recorded in the report
+  unsigned seeds = 0;        // --seeds N (0: not given)
+  bool seeds_given = false;
 };
 
 struct TimedRender {
@@ -133,6 +142,32 @@ nlohmann::json metricsJson(const model::ImageMetrics& m) {
           {"mean_abs", m.mean_abs}, {"max_abs", m.max_abs}, {"pixels_over_1_255", m.pixels_over_1_255}};
 }
 
+// image.metrics.flip: LDR-FLIP's pooled values and the viewing condition.
+nlohmann::json flipJson(const model::FlipMap& f, double ppd) {
+  return {{"mean", f.stats.mean},
+          {"weighted_median", f.stats.weighted_median},
+          {"weighted_q1", f.stats.weighted_q1},
+          {"weighted_q3", f.stats.weighted_q3},
+          {"max", f.stats.max},
+          {"ppd", ppd}};
+}
+
+// "mlab (k=4, format fp32)": only the settings the algorithm uses
+// (model/AlgorithmSettings.hpp); "abuffer" alone.
+std::string algorithmWithSettings(const std::string& algo, const AlgorithmParams& p) {
+  const model::AlgorithmSettings u = model::algorithmSettings(algo);
+  std::vector<std::string> parts;
+  if (u.layers) parts.push_back(fmt::format("k={}", p.layers));
+  if (u.format) parts.push_back(fmt::format("format {}", model::toString(p.format)));
+  if (u.bits) parts.push_back(fmt::format("bits {}", p.bits));
+  if (u.samples) parts.push_back(fmt::format("samples {}", p.samples));
+  if (u.weight) parts.push_back(fmt::format("weight eq. {}", p.weight));
+  if (u.seed) parts.push_back(fmt::format("seed {}", p.seed));
+  std::string s;
+  for (const auto& part : parts) s += (s.empty() ? "" : ", ") + part;
+  return s.empty() ? algo : algo + " (" + s + ")";
+}
+
 uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
   if (!j.contains(a) || !j[a].contains(b)) return 0;
   return j[a][b].get<uint64_t>();
@@ -187,6 +222,8 @@ void checkOptions(const RunArgs& a) {
   for (float c : a.background)
     if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("--background: each channel must be in [0,1]");
   checkFrameSizeOptions(a.width_given, a.width, a.height_given, a.height);
+  if (!(a.ppd > 0.0 && a.ppd <= 10000.0))
+    throw std::invalid_argument(fmt::format("--ppd: expected pixels per degree in (0, 10000], got {}", a.ppd));
   if (a.vcd_given && a.vcd.empty()) throw std::invalid_argument("--vcd: expected a file name, got an empty path");
   if (a.trace.empty()) throw std::invalid_argument("--trace: expected a trace file (.oitt or .csv), got an empty path");
   if (a.config_given && a.config_file.empty())
@@ -197,10 +234,17 @@ void checkOptions(const RunArgs& a) {
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
+  checkOrderingOptions(a.mode, a.seeds_given, a.seeds);
+  if (a.seeds_given && a.reference == "none")
+    throw std::invalid_argument(fmt::format(
+        "--seeds {}: the flicker measures each seed's image against the reference; --reference none has none "
+        "(give --reference abuffer or FILE.pfm)",
+        a.seeds));
 }
 
 // The files a run writes into --out, the report last.
-constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"};
+constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "flicker.png",
+                                    "report.json"};
 
 // Counts the fragments of transparent draws: the most the A-buffer under
 // test can store (the trace's record count bounds it less tightly).
@@ -259,6 +303,7 @@ void runReplay(RunArgs& a) {
   // mode, so a bad --preset, --config or --set fails at once and never passes
   // silently in functional mode (which does not use it).
   const rop::ConfigTree tree = rop::resolveTree(a.preset, a.config_file, a.sets);
+  checkOrderingOptions(a.mode, a.seeds_given, a.seeds, &tree.config());
   if (!a.vcd.empty()) {
     try {
       rop::checkVcdWritable(a.vcd);
@@ -286,6 +331,10 @@ void runReplay(RunArgs& a) {
                     : a.reference == "none"  ? ReferenceKind::None
                                              : ReferenceKind::File;
   shape.run_is_reference = a.algo == "abuffer";
+  if (a.seeds_given) {
+    shape.seeds = a.seeds;
+    shape.seed_processes = std::min(rop::usableCores(), a.seeds);
+  }
   // The A-buffer under test holds transparent fragments only: a quick pass
   // counts them, for its reservation and the estimate (the record count would
   // refuse a frame with many opaque ones). The reference's bands need no count
@@ -300,6 +349,7 @@ void runReplay(RunArgs& a) {
 
   TimedRender run;
   nlohmann::json timing_stats;
+  SeedRuns seed_runs;
   // SystemC writes the VCD while it runs: under a staged name (ending in
   // ".vcd", which SystemC would append), renamed with the other outputs.
   StagedOutputs staged;
@@ -310,11 +360,13 @@ void runReplay(RunArgs& a) {
     to.clear_colour = clear;
     to.vcd_path = vcd_staged;
     to.progress = [&](double fraction, const std::string& what) { progress.update(fraction, what); };
-    rop::TimingResult t = rop::runTiming(*src, *algo, tree.config(), to);
+    rop::TimingResult t = a.seeds_given ? seed_runs.run(a.trace, a.width, a.height, a.algo, a.params, a.seeds,
+                                                        tree.config(), to, progress)
+                                        : rop::runTiming(*src, *algo, tree.config(), to);
     progress.finish();
     run.result.image = std::move(t.image);
     run.result.counts = t.counts;
-    run.result.state_bytes = uint64_t(h.width) * h.height * algo->bytesPerPixel() + algo->poolBytes();
+    run.result.state_bytes = uint64_t(h.width) * h.height * algo->bytesPerPixel() + t.pool_bytes;
     run.wall_seconds = t.wall_seconds;
     timing_stats = std::move(t.stats);
   } else {
@@ -344,6 +396,9 @@ void runReplay(RunArgs& a) {
   }
   const bool compared = shape.reference != ReferenceKind::None;
   const model::ImageMetrics m = compared ? model::compareImages(run.result.image, ref.result.image) : model::ImageMetrics{};
+  const model::FlipMap flip =
+      compared ? model::ldrFlip(model::toSrgb8Image(ref.result.image), model::toSrgb8Image(run.result.image), a.ppd)
+               : model::FlipMap{};
   const model::RenderCounts& c = run.result.counts;
   if (!c.balanced())
     throw std::logic_error(fmt::format("fragment outcomes do not sum to fragments in ({} != {} + {} + {} + {} + {})",
@@ -365,7 +420,8 @@ void runReplay(RunArgs& a) {
                  {"samples", a.params.samples},
                  {"weight", a.params.weight},
                  {"seed", a.params.seed},
-                 {"background", a.background}};
+                 {"background", a.background},
+                 {"ignored_settings", model::ignoredSettings(a.algo)}};
   nlohmann::json passes = nlohmann::json::array();
   for (unsigned p = 0; p < c.pass_outcomes.size(); ++p)
     passes.push_back({{"name", std::string(algo->passName(p))},
@@ -381,13 +437,18 @@ void runReplay(RunArgs& a) {
                  {"state_write_bytes", c.bytes_written},
                  {"source_passes", c.source_passes}};
   j["image"] = {{"files", {{"image_png", "image.png"}, {"image_pfm", "image.pfm"}}},
-                {"reference", shape.reference == ReferenceKind::File ? "file" : a.reference}};
+                {"reference", shape.reference == ReferenceKind::File ? "file" : a.reference},
+                {"order", imageOrder(a.mode, tree.config())}};
   if (compared) {
     j["image"]["files"]["reference_pfm"] = "reference.pfm";
     j["image"]["files"]["diff_png"] = "diff.png";
+    j["image"]["files"]["flip_png"] = "flip.png";
     j["image"]["metrics"] = metricsJson(m);
+    j["image"]["metrics"]["flip"] = flipJson(flip, a.ppd);
   }
   if (shape.reference == ReferenceKind::File) j["image"]["reference_file"] = a.reference;
+  model::Image flicker;
+  if (a.seeds_given) flicker = seed_runs.addFlicker(j, ref.result.image);
   j["sim"] = {{"wall_seconds", run.wall_seconds},
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
@@ -422,7 +483,9 @@ void runReplay(RunArgs& a) {
   if (compared) {
     model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
     model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
+    model::writeFlipPng(flip, staged.stage(out / "flip.png"));
   }
+  if (a.seeds_given) model::writePng(flicker, staged.stage(out / "flicker.png"));
   const uint64_t peak_rss = peakResidentBytes();  // every image written: only the report is left
   j["sim"]["memory"]["peak_rss_bytes"] = peak_rss;
   reports::writeJsonReport(staged.stage(out / "report.json"), j);
@@ -431,9 +494,8 @@ void runReplay(RunArgs& a) {
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
              c.fragments_in, c.opaque, h.draws.size());
-  fmt::print("algorithm   {} (k={}, format {}), mode {}{}, {} pass(es) over the trace\n", a.algo, a.params.layers,
-             model::toString(a.params.format), a.mode, timing ? ", preset " + tree.config().preset : "",
-             c.source_passes);
+  fmt::print("algorithm   {}, mode {}{}, {} pass(es) over the trace\n", algorithmWithSettings(a.algo, a.params), a.mode,
+             timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
   fmt::print("memory      {} B/pixel, {} of per-pixel state, {} read, {} written\n", algo->bytesPerPixel(),
@@ -445,12 +507,16 @@ void runReplay(RunArgs& a) {
                                          humanBytes(double(band_file_bytes)))
                            : std::string());
   if (timing) printTimingSummary(j);
-  if (!compared)
-    fmt::print("image       no reference (--reference none): no error metrics, no reference.pfm or diff.png\n");
-  else
+  if (!compared) {
+    fmt::print("image       no reference (--reference none): no error metrics, no reference.pfm, diff.png or flip.png\n");
+  } else {
     fmt::print("image       vs {}: RMSE {:.6f}, PSNR {:.2f} dB, SSIM {:.5f}, max |err| {:.5f}, {} px > 1/255\n",
                shape.reference == ReferenceKind::File ? a.reference : "abuffer", m.rmse, m.psnr, m.ssim, m.max_abs,
                m.pixels_over_1_255);
+    fmt::print("            FLIP at {:.2f} px/degree: mean {:.5f}, weighted median {:.5f}, max {:.5f} (flip.png)\n",
+               a.ppd, flip.stats.mean, flip.stats.weighted_median, flip.stats.max);
+  }
+  if (a.seeds_given) printFlicker(j["image"]["flicker"]);
   fmt::print("speed       {:.3f} s, {} fragments/s{}\n", run.wall_seconds,
              humanCount(run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0),
              compared ? fmt::format(" (reference {:.3f} s)", ref.wall_seconds) : std::string());
@@ -465,7 +531,8 @@ void addRunCommand(CLI::App& app) {
   // A later option wins, so scripts can pass defaults and users override them.
   cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cmd->add_option("--trace,-t", a->trace, "Trace file (.oitt binary or .csv)")->required();
-  cmd->add_option("--out,-o", a->out, "Output folder for image.png, image.pfm, reference.pfm, diff.png, report.json")
+  cmd->add_option("--out,-o", a->out,
+                  "Output folder for image.png, image.pfm, reference.pfm, diff.png, flip.png, report.json")
       ->required();
   std::string algos;
   for (const auto& info : model::algorithmNames()) algos += (algos.empty() ? "" : ", ") + std::string(info.name);
@@ -497,6 +564,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--samples", a->params.samples, "stochastic: samples per pixel S")->capture_default_str();
   cmd->add_option("--weight", a->params.weight, "wboit: weight equation 7, 8, 9 or 10")->capture_default_str();
   cmd->add_option("--seed", a->params.seed, "Seed of the per-fragment random hash")->capture_default_str();
+  cmd->add_option("--ppd", a->ppd,
+                  "FLIP's viewing condition, pixels per degree (default 67.02: 0.7 m from a 0.7 m wide 3840-pixel "
+                  "display; model/METRICS.md)");
   cmd->add_option("--background", a->background, "Clear colour r,g,b (linear) where no opaque fragment landed")
       ->delimiter(',')
       ->expected(3)
@@ -505,7 +575,12 @@ void addRunCommand(CLI::App& app) {
   CLI::Option* height =
       cmd->add_option("--height", a->height, "Frame height of a CSV trace without a height comment (1..65535)");
   cmd->add_flag("--quiet,-q", a->quiet, "No progress or summary");
-  cmd->callback([a, width, height, vcd, config] {
+  CLI::Option* seeds = cmd->add_option(
+      "--seeds", a->seeds,
+      "Timing mode: replay the frame with N shader-latency seeds (input.seed, +1, ...) on every core; adds "
+      "flicker.png and image.flicker (seed 0's run is the main image and report)");
+  cmd->callback([a, width, height, vcd, config, seeds] {
+    a->seeds_given = seeds->count() > 0;
     a->command_line = commandLine();
     a->vcd_given = vcd->count() > 0;
     a->config_given = config->count() > 0;

@@ -58,7 +58,7 @@ configs=(
   "defaults|small|"
   "skips-off|small|--set skip.early_depth=false --set skip.fast_clear=false --set skip.lazy_merge=false --set skip.idle_cycles=false"
   "dgpu|small|--preset dgpu"
-  "eos-quad-unordered|small|--set lock.release=end_of_shader --set lock.granularity=quad --set lock.ordered=false"
+  "eos-quad-unordered|small|--set lock.release=end_of_shader --set lock.granularity=quad --set lock.mode=unordered"
   "fixed-1part-tile|small|--set input.latency_model=fixed --set partitions.count=1 --set lock.granularity=tile"
   "abuffer|small|--algo abuffer"
   "fp32-smallcache|small|--format fp32 --set cache.size_bytes=16384 --set cache.miss_queue=2 --set lock.capacity=64"

@@ -98,6 +98,49 @@ bool encodePng(FILE* file, uint32_t width, uint32_t height, const uint8_t* rgbTo
   return true;
 }
 
+// Reads any 8-bit or 16-bit PNG as RGB codes (libpng's transforms: palette
+// and grey expanded, 16-bit cut to 8, alpha dropped). Same longjmp rule as
+// encodePng: the message is copied out through `why`.
+bool decodePng(FILE* file, Srgb8Image& img, std::string& why) {
+  unsigned char sig[8];
+  if (std::fread(sig, 1, 8, file) != 8 || png_sig_cmp(sig, 0, 8) != 0) {
+    why = "no PNG signature";
+    return false;
+  }
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  if (!png) return false;
+  png_infop info = png_create_info_struct(png);
+  if (!info) {
+    png_destroy_read_struct(&png, nullptr, nullptr);
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    why = "corrupt or truncated data";
+    return false;
+  }
+  png_init_io(png, file);
+  png_set_sig_bytes(png, 8);
+  png_read_info(png, info);
+  png_set_expand(png);
+  png_set_strip_16(png);
+  png_set_strip_alpha(png);
+  png_set_gray_to_rgb(png);
+  png_read_update_info(png, info);
+  img.width = png_get_image_width(png, info);
+  img.height = png_get_image_height(png, info);
+  if (png_get_rowbytes(png, info) != std::size_t(img.width) * 3) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    why = "unsupported pixel layout";
+    return false;
+  }
+  img.rgb.resize(std::size_t(img.width) * img.height * 3);
+  for (uint32_t row = 0; row < img.height; ++row) png_read_row(png, img.rgb.data() + std::size_t(row) * img.width * 3, nullptr);
+  png_read_end(png, nullptr);
+  png_destroy_read_struct(&png, &info, nullptr);
+  return true;
+}
+
 }  // namespace
 
 float linearToSrgb(float linear) { return float(srgbEncode(linear)); }
@@ -123,9 +166,12 @@ void writePng(const Image& img, const std::string& path) {
     throw std::runtime_error(fmt::format("{}: cannot write an empty {}x{} PNG", path, img.width,
                                          img.height));
   // Encode everything before touching the file system.
-  std::vector<uint8_t> rgb(img.pixels.size() * 3);
+  Srgb8Image codes;
+  codes.width = img.width;
+  codes.height = img.height;
+  codes.rgb.resize(img.pixels.size() * 3);
   for (uint32_t y = 0; y < img.height; ++y) {
-    uint8_t* out = rgb.data() + std::size_t(img.height - 1 - y) * img.width * 3;  // top row first
+    uint8_t* out = codes.rgb.data() + std::size_t(img.height - 1 - y) * img.width * 3;  // top row first
     for (uint32_t x = 0; x < img.width; ++x) {
       const Rgb& p = img.pixels[img.index(x, y)];
       out[3 * x + 0] = toSrgb8(p.r);
@@ -133,14 +179,23 @@ void writePng(const Image& img, const std::string& path) {
       out[3 * x + 2] = toSrgb8(p.b);
     }
   }
+  writePng(codes, path);
+}
 
+void writePng(const Srgb8Image& img, const std::string& path) {
+  if (img.width == 0 || img.height == 0)
+    throw std::runtime_error(fmt::format("{}: cannot write an empty {}x{} PNG", path, img.width,
+                                         img.height));
+  if (img.rgb.size() != std::size_t(img.width) * img.height * 3)
+    throw std::runtime_error(fmt::format("{}: image is {}x{} but holds {} bytes", path, img.width, img.height,
+                                         img.rgb.size()));
   TempFile tmp(tempPathNextTo(path));
   std::unique_ptr<FILE, FileCloser> file(std::fopen(tmp.path().c_str(), "wb"));
   if (!file)
     throw std::runtime_error(fmt::format("{}: cannot create {}: {}", path, tmp.path(), std::strerror(errno)));
 
   errno = 0;
-  const bool ok = encodePng(file.get(), img.width, img.height, rgb.data());
+  const bool ok = encodePng(file.get(), img.width, img.height, img.rgb.data());
   const int write_err = errno;
   const bool closed = std::fclose(file.release()) == 0;
   const int err = closed ? write_err : errno;
@@ -148,6 +203,15 @@ void writePng(const Image& img, const std::string& path) {
     throw std::runtime_error(
         fmt::format("{}: PNG write failed{}", path, err ? std::string(": ") + std::strerror(err) : std::string()));
   commitTemp(tmp, path);
+}
+
+Srgb8Image readPng(const std::string& path) {
+  std::unique_ptr<FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
+  if (!file) throw std::runtime_error(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  Srgb8Image img;
+  std::string why;
+  if (!decodePng(file.get(), img, why)) throw std::runtime_error(fmt::format("{}: not a readable PNG: {}", path, why));
+  return img;
 }
 
 void writePfm(const Image& img, const std::string& path) {

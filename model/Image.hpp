@@ -33,10 +33,22 @@ float linearToSrgb(float linear);
 // round(linearToSrgb(v) * 255) evaluated in double (e.g. 0.5 -> 188).
 uint8_t toSrgb8(float linear);
 
+// 8-bit sRGB RGB triples, top row first (as a PNG stores them).
+struct Srgb8Image {
+  uint32_t width = 0, height = 0;
+  std::vector<uint8_t> rgb;  // 3 x width x height
+};
+
 // 8-bit sRGB PNG (with an sRGB chunk), top row first. Written to a temporary
 // file in the same directory, then renamed. Throws std::runtime_error naming
 // the file on I/O errors or any NaN/Inf pixel (nothing is written then).
 void writePng(const Image& img, const std::string& path);
+// The same PNG from 8-bit codes as they are (e.g. a colour-mapped error map).
+void writePng(const Srgb8Image& img, const std::string& path);
+// Reads an 8-bit PNG (grey, grey + alpha, RGB or RGBA; 16-bit channels are cut
+// to their high byte, alpha dropped) as RGB codes. Throws std::runtime_error
+// naming the file on anything else.
+Srgb8Image readPng(const std::string& path);
 // Linear float RGB PFM: "PF\n<w> <h>\n-1.0\n", little-endian, bottom row
 // first (PFM's own order, identical to Image's). Same temp+rename and
 // non-finite rules as writePng.

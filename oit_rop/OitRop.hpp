@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "oit_rop/DramSystem.hpp"
+#include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/RopPartition.hpp"
 
 namespace oit::rop {

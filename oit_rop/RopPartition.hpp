@@ -1,11 +1,11 @@
 // RopPartition: one ROP partition (sc_module). Its stages are plain C++
 // objects (ShaderInput -> EarlyDepth -> PixelLock -> BlendArrayCache ->
-// BlendAlu, then Resolve) advanced cycle by cycle by ONE SC_THREAD with a
-// tlm_quantumkeeper; when no stage can move, the thread jumps to the next
-// cycle at which one can (skip.idle_cycles), and the skipped span keeps every
-// stage's status (busy / stall cause / idle) for the accounting. With
-// sim.engine = approximate the transparent phase visits each fragment once
-// instead (approximatePhase, DESIGN.md).
+// BlendAlu, then Resolve) driven by ONE SC_THREAD with a tlm_quantumkeeper.
+// The partition owns the stages, its time (advance: quantum keeper) and its
+// accounts; a timing engine moves the fragments through the stages during the
+// transparent passes (engines/: CycleEngine evaluates cycle by cycle, the
+// reference; ApproximateEngine visits each fragment once, sim.engine =
+// approximate, DESIGN.md). The opaque phase and the resolve are shared.
 //
 // Frame: opaque phase (depth + colour of the opaque pre-pass, charged as
 // traffic and input time), then every algorithm pass (pass p+1 after this
@@ -20,17 +20,20 @@
 #include <memory>
 #include <vector>
 
-#include "oit_rop/ApproximateTiming.hpp"
-#include "oit_rop/BlendAlu.hpp"
-#include "oit_rop/BlendArrayCache.hpp"
-#include "oit_rop/DramSystem.hpp"
-#include "oit_rop/EarlyDepth.hpp"
-#include "oit_rop/FrontEnd.hpp"
-#include "oit_rop/PixelLock.hpp"
-#include "oit_rop/ShaderInput.hpp"
+#include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/stages/BlendArrayRmw.hpp"
+#include "oit_rop/memory/BlendArrayCache.hpp"
+#include "oit_rop/memory/DramSystem.hpp"
+#include "oit_rop/stages/EarlyDepth.hpp"
+#include "oit_rop/stages/FrontEnd.hpp"
+#include "oit_rop/stages/PixelLock.hpp"
+#include "oit_rop/stages/ShaderInput.hpp"
 #include "oit_rop/TimingStats.hpp"
 
 namespace oit::rop {
+
+class CycleEngine;
+class ApproximateEngine;
 
 // DRAM address map of the frame's surfaces (tile-linear).
 struct AddressMap {
@@ -67,6 +70,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
 
   SC_HAS_PROCESS(RopPartition);
   RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemorySystem& memory);
+  ~RopPartition() override;
 
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
 
@@ -77,21 +81,30 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // The lock's figures, from the PixelLock or (sim.engine = approximate) the
   // approximate engine; scoreboard entries in use and fragments waiting for
   // the lock at the partition's current cycle (the sampler's values).
-  const LockStats& lockStats() const { return approximate_ ? approx_lock_ : lock_.stats(); }
-  uint32_t occupancy() const { return approximate_ ? uint32_t(approx_sb_.size()) : lock_.occupancy(); }
-  uint32_t lockWaiters() const { return approximate_ ? uint32_t(approx_waiting_.size()) : uint32_t(lock_.waiting()); }
+  const LockStats& lockStats() const;
+  uint32_t occupancy() const;
+  uint32_t lockWaiters() const;
   const BlendArrayCache& cache() const { return cache_; }
   const EarlyDepth& earlyDepth() const { return early_; }
   const BlendAlu& alu() const { return alu_; }
+  // lock.mode unordered / none: the inserts this partition made (nullptr when ordered).
+  const BlendArrayRmw* rmw() const { return rmw_.get(); }
 
  private:
+  // The engines move fragments through this partition's stages and time.
+  friend class CycleEngine;
+  friend class ApproximateEngine;
+  // The pipeline's registers between stages (the cycle engine's; the
+  // approximate engine computes a fragment's times without them): what a
+  // fragment carries from issue to release, indexed by its scoreboard token,
+  // and the queues after the lock.
   struct TokenInfo {
     uint32_t tile;
     uint8_t flags, outcome, rows;
   };
-  struct CacheEntry {
+  struct CacheEntry {  // a fragment between lock entry and its blend slot
     uint32_t token;
-    Cycle ready;
+    Cycle ready;  // its line is there
     bool miss;
   };
   struct ResolveEntry {
@@ -100,7 +113,16 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   };
 
   void run();
-  void advance(Cycle next, bool count_skip);  // now_ = next, skip count, quantum keeper
+  // now_ = next, skip count, quantum keeper. Inline (with the helpers below):
+  // the engines call them per cycle or per fragment from another file.
+  void advance(Cycle next, bool count_skip) {
+    // Stage accounting is lazy (setStatus adds a status's span when it changes).
+    const Cycle span = next - now_;
+    if (count_skip && span > 1) res_.skipped_idle += span - 1;
+    now_ = next;
+    if (now_ >= next_sync_) syncQuantum();
+  }
+  void syncQuantum();  // yields to the other partitions at the quantum boundary reached
   // The status of stage st from now_ on (holds until changed). Spans are
   // accounted when a status changes, not every evaluated cycle.
   void setStatus(Stage st, StageStatus v) {
@@ -117,21 +139,41 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     return StageStatus{StageStatus::Kind(c & 3), Stall(c >> 2)};
   }
   // setStatus for stages 0 .. stages-1 from packed codes (byte i = stage i).
-  void setStatuses(uint64_t codes, unsigned stages);
+  void setStatuses(uint64_t codes, unsigned stages) {
+    for (unsigned i = 0; i < stages; ++i) {
+      const uint8_t c = uint8_t(codes >> (8 * i));
+      if (c != uint8_t(codes_ >> (8 * i))) setStatus(Stage(i), decode(c));
+    }
+  }
   void setAll(StageStatus v);
   void flushAccounts();  // accounts every stage's current status up to now_
   void opaquePhase();
-  bool transparentStep();  // one cycle; false when every pass drained
-  void approximatePhase();  // every pass, one visit per fragment (sim.engine = approximate)
-  Cycle nextEvent(bool refused, bool sb_full, bool draining);
   void waitForFrontEnd();
   void resolvePhase();
-  void release(uint32_t token);
-  void releaseLine(uint32_t tile);  // BlendArrayCache::release, re-enabling a set-refused retry
+  // BlendArrayCache::release, re-enabling a set-refused retry.
+  void releaseLine(uint32_t tile) {
+    if (cache_.release(tile)) retry_at_ = 0;  // the refused access's set has a line out of use now
+  }
   void nodeWrite();
-  void refillInput();
+  void refillInput() {
+    auto& q = front_.queue(id_);
+    while (q.empty() && front_.canRefill()) front_.refill();
+    starving_ = q.empty() && !front_.exhausted();
+  }
   // BlendArrayCache::acquire, not called before retry_at_ (false: refused; ready: when the line is there).
-  bool acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready);
+  bool acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready) {
+    // While every miss-queue entry is busy a retry would be refused again: no call
+    // until the first entry frees, so the refusals counted (cache.miss_queue_full:
+    // one per access that had to wait) and the cycle the access goes through do
+    // not depend on how often the partition is evaluated (skip.idle_cycles).
+    // A set with every way in use is retried after the release that frees one
+    // of its lines (releaseLine), also independent of how often we ask.
+    if (now < retry_at_) return false;
+    ready = cache_.acquire(now, tile, write);
+    if (ready != kNever) return true;
+    retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
+    return false;
+  }
 
   unsigned id_;
   PartitionSetup s_;
@@ -149,11 +191,12 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   PixelLock lock_;
   BlendArrayCache cache_;
   BlendAlu alu_;
+  std::unique_ptr<BlendArrayRmw> rmw_;  // lock.mode unordered / none: inserts at lock entry
   std::vector<TokenInfo> tok_;
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
   Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees (kNever: until a line of the set is released)
-  unsigned cache_ports_;
+  unsigned cache_ports_;              // cache accesses per cycle (ceil(alu.blends_per_clock))
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
   std::array<uint8_t, 4> rows_of_{};  // BlendAlu::rowsFor by outcome (index 3: invalid, 0 rows)
@@ -167,16 +210,11 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
   Cycle last_write_done_ = 0;
+  MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
-  // Approximate engine: releases of the fragments in flight and lock-entry
-  // cycles of those waiting for the lock (ReleaseCalendars), and its lock figures.
-  bool approximate_ = false;
-  ReleaseCalendar approx_sb_, approx_waiting_;
-  void retireCalendars() {  // both calendars up to now_ (they retire lazily)
-    approx_sb_.retire(now_);
-    approx_waiting_.retire(now_);
-  }
-  LockStats approx_lock_;
+  // The transparent passes' engine: one of the two (sim.engine).
+  std::unique_ptr<CycleEngine> cycle_;
+  std::unique_ptr<ApproximateEngine> approximate_;
   sc_core::sc_event done_event_;
   PartitionResult res_;
 };

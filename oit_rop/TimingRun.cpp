@@ -12,9 +12,10 @@
 #include <stdexcept>
 #include <tlm>
 
-#include "oit_rop/BlendAlu.hpp"
-#include "oit_rop/FrontEnd.hpp"
+#include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/OitRop.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 
 namespace oit::rop {
 
@@ -32,6 +33,8 @@ void validate(const RopConfig& c) {
   if (c.alu.blends_per_clock == 0) bad("alu.blends_per_clock must be > 0");
   if (!(c.alu.fp16_rate > 0) || !(c.alu.fp32_rate > 0)) bad("alu.fp16_rate and alu.fp32_rate must be > 0");
   if (c.stats.interval_cycles == 0) bad("stats.interval_cycles must be > 0");
+  if (c.sim.engine == SimEngine::Approximate && c.lock.mode != LockMode::Ordered)
+    bad(approximateLockModeProblem(c.lock.mode));
 }
 
 // The trace as the partitions' SystemC threads read it. SystemC turns an
@@ -181,6 +184,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   EarlyDepthStats depth{};
   AluStats alu{};
   std::vector<uint64_t> part_frags;
+  uint64_t lost_updates = 0;
   for (unsigned i = 0; i < n; ++i) {
     const RopPartition& p = top->partition(i);
     PartitionResult r = p.result();
@@ -237,6 +241,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     alu.blends += p.alu().stats().blends;
     alu.rows += p.alu().stats().rows;
     alu.dropped += p.alu().stats().dropped;
+    // lock.mode unordered / none: the outcomes were decided at lock entry.
+    if (const BlendArrayRmw* rmw = p.rmw()) {
+      for (unsigned pass = 0; pass < rmw->passOutcomes().size(); ++pass) front.addOutcomes(pass, rmw->passOutcomes()[pass]);
+      lost_updates += rmw->lostUpdates();
+    }
   }
 
   // ---- The image: functional resolve of the per-pixel state ----
@@ -250,6 +259,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     res.image.pixels[p] = algo.resolve(state.data() + p * words, bg);
   }
   res.counts = front.counts();
+  res.pool_bytes = algo.poolBytes();
   res.counts.source_passes = unsigned(front.sourceReads() + (classes.anyOpaque() ? 1 : 0));
 
   // ---- Statistics ----
@@ -357,7 +367,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                 {"peak_occupancy", lock.peak_occupancy},
                 {"out_of_order_entries", lock.out_of_order_entries},
                 {"entries", lock.entries},
-                {"capacity", cfg.lock.capacity}};
+                {"capacity", cfg.lock.capacity},
+                {"mode", lockModeName(cfg.lock.mode)},
+                {"lost_updates", lost_updates}};
   json cachej = {{"hit_rate", cache.hitRate()},          {"accesses", cache.accesses},
                  {"hits", cache.hits},                   {"misses", cache.misses},
                  {"clear_fills", cache.clear_fills},     {"evictions", cache.evictions},

@@ -1,7 +1,8 @@
 // The timing mode of oitsim: replays a fragment trace through the SystemC ROP
-// model (OitRop) and returns the image (bit-identical to FunctionalRenderer's
-// by construction) with the timing, traffic and lock statistics. The schema of
-// `stats` is in oit_rop/DESIGN.md.
+// model (OitRop) and returns the image (with lock.mode = ordered bit-identical
+// to FunctionalRenderer's by construction; with unordered or none in the
+// order the timing decides, DESIGN.md "Ordering") with the timing, traffic and
+// lock statistics. The schema of `stats` is in oit_rop/DESIGN.md.
 //
 // SystemC elaborates once per process: runTiming() may be called once per
 // process (it throws std::logic_error on a second call).
@@ -14,7 +15,7 @@
 #include "model/FunctionalRenderer.hpp"
 #include "model/Image.hpp"
 #include "model/OitAlgorithm.hpp"
-#include "oit_rop/RopConfig.hpp"
+#include "oit_rop/config/RopConfig.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::rop {
@@ -31,6 +32,7 @@ struct TimingResult {
   model::RenderCounts counts;
   nlohmann::json stats;       // sections timing, fragments, memory, lock, cache, skips, depth, timeseries, per_draw
   double wall_seconds = 0.0;  // not in stats: stats are deterministic
+  uint64_t pool_bytes = 0;    // the algorithm's poolBytes() after the run (A-buffer nodes)
 };
 
 // The file a VCD path names: SystemC appends ".vcd" unless the path ends in it.

@@ -11,8 +11,9 @@ packages=(
   libcli11-dev nlohmann-json3-dev libpng-dev zlib1g-dev
   # real meshes: the Stanford bunny
   glmark2-data
-  # headless OpenGL for `oitsim capture`: Mesa's EGL (surfaceless) and llvmpipe
-  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  # headless OpenGL for `oitsim capture` (loaded at run time, only by capture):
+  # GLVND's libEGL and libOpenGL, Mesa's EGL (surfaceless) and llvmpipe; headers to build
+  libegl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
   # `oitsim report` (plots, PFM conversion), YAML sweep specs, the report's browser test
   python3 python3-matplotlib python3-yaml chromium
 )

@@ -2,8 +2,12 @@
 """Print the Markdown tables of reports/repro/README.md from the committed
 results (so the README's numbers come from the tables, not from hand copying).
 
+    python3 reports/repro/tables.py error-vs-k        # from error-vs-k/results.csv
     python3 reports/repro/tables.py hardware-pareto   # from hardware-pareto/results.csv
+    python3 reports/repro/tables.py table1-memory     # from table1-memory/results.csv
     python3 reports/repro/tables.py speed-modes       # from speed-modes/speed.json
+
+reports/repro/regenerate.sh NAME reruns a reproduction and prints its table.
 """
 import csv
 import json
@@ -19,8 +23,46 @@ def grouped(n):
     return f"{n:,}".replace(",", " ")
 
 
+def rows_of(name):
+    return list(csv.DictReader(open(os.path.join(HERE, name, "results.csv"), newline="")))
+
+
+def error_vs_k():
+    """RMSE / SSIM, then the FLIP mean (when the results have it), per trace, algorithm and k."""
+    rows = rows_of("error-vs-k")
+    ks = sorted({int(r["axis.layers"]) for r in rows})
+    cells = {}
+    for r in rows:
+        cells.setdefault((r["trace"], r["axis.algo"]), {})[int(r["axis.layers"])] = r
+    head = "| trace | algorithm | " + " | ".join(f"k={k}" for k in ks) + " |"
+    rule = "|---|---|" + "---|" * len(ks)
+    print(head)
+    print(rule)
+    for (trace, algo), by_k in sorted(cells.items()):
+        print(f"| {trace} | {algo} | " + " | ".join(
+            f"{float(by_k[k]['image.metrics.rmse']):.4f} / {float(by_k[k]['image.metrics.ssim']):.4f}" for k in ks) + " |")
+    if all(r.get("image.metrics.flip.mean") for r in rows):
+        print()
+        print(head.replace("| algorithm |", "| algorithm (FLIP mean) |"))
+        print(rule)
+        for (trace, algo), by_k in sorted(cells.items()):
+            print(f"| {trace} | {algo} | " + " | ".join(
+                f"{float(by_k[k]['image.metrics.flip.mean']):.4f}" for k in ks) + " |")
+
+
+def table1_memory():
+    """The blending arrays allocated per configuration and trace (bytes, MiB)."""
+    rows = rows_of("table1-memory")
+    print("| trace | config | fragments F | blend_arrays allocated (bytes) | MiB |")
+    print("| --- | --- | --- | --- | --- |")
+    for r in rows:
+        b = int(r["memory.footprint.allocated.blend_arrays"])
+        print(f"| {r['trace']} | {r['axis.config']} | {grouped(int(r['trace.fragments']))} | {grouped(b)} "
+              f"| {b / MIB:.2f} |")
+
+
 def hardware_pareto():
-    rows = list(csv.DictReader(open(os.path.join(HERE, "hardware-pareto", "results.csv"), newline="")))
+    rows = rows_of("hardware-pareto")
     order = {"particles": 0, "hair": 1}
     algos = {"mlab": 0, "hybrid": 1, "adaptive": 2}
     rows.sort(key=lambda r: (order.get(r["trace"], 9), algos.get(r["axis.algo"], 9), int(r["axis.layers"])))
@@ -66,9 +108,8 @@ def speed_modes():
 
 if __name__ == "__main__":
     which = sys.argv[1] if len(sys.argv) > 1 else ""
-    if which == "hardware-pareto":
-        hardware_pareto()
-    elif which == "speed-modes":
-        speed_modes()
-    else:
-        sys.exit("usage: tables.py hardware-pareto|speed-modes")
+    tables = {"error-vs-k": error_vs_k, "hardware-pareto": hardware_pareto, "table1-memory": table1_memory,
+              "speed-modes": speed_modes}
+    if which not in tables:
+        sys.exit("usage: tables.py " + "|".join(tables))
+    tables[which]()

@@ -203,12 +203,21 @@ TEST(CliInfoConvert, OutputPathsAreCheckedFirst) {
       {"info " + in + " --heatmap " + dir.file(""), "--heatmap " + dir.file("") + ": is a directory, expected a file name"},
       {"info " + in + " --heatmap " + dir.file("no/h.pfm"), "--heatmap " + dir.file("no/h.pfm") + ": folder " +
                                                                 dir.file("no") + " does not exist"},
+      // It writes PFM only; a PNG name held a PFM.
+      {"info " + in + " --heatmap " + dir.file("h.png"), "--heatmap " + dir.file("h.png") +
+                                                             ": expected a file name ending in .pfm (the heatmap is a "
+                                                             "PFM image; no other format)"},
+      {"info " + in + " --heatmap " + dir.file("h"), "--heatmap " + dir.file("h") +
+                                                         ": expected a file name ending in .pfm (the heatmap is a PFM "
+                                                         "image; no other format)"},
   };
   for (const Case& c : cases) {
     CliResult r = runOitsim(c.cmd);
     EXPECT_EQ(r.exit_code, 1) << c.cmd << "\n" << r.output;
     EXPECT_EQ(r.output, "oitsim: error: " + c.message + "\n") << c.cmd;
   }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("h.png")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("h")));
 }
 
 // A binary or gzipped trace named .csv is named as such, an empty .csv fails

@@ -170,8 +170,8 @@ TEST_F(CliReliability, ReferenceFileGivesTheMetricsOfTheReferenceItHolds) {
   EXPECT_TRUE(fs::exists(exact + "/reference.pfm"));  // refused before the folder is touched
 }
 
-// A 16384 x 16384 A-buffer frame: the images and the metrics' planes alone
-// need about 80 B per pixel (21 GiB); against an 8 GiB budget it is refused
+// A 16384 x 16384 A-buffer frame: the images and FLIP's planes alone need
+// about 110 B per pixel (26 GiB); against an 8 GiB budget it is refused
 // before any work, naming the frame, the algorithm, the memory and the budget.
 TEST_F(CliReliability, AFrameOverTheBudgetIsRefusedBeforeAnyWork) {
   TempDir dir("budget");
@@ -184,7 +184,7 @@ TEST_F(CliReliability, AFrameOverTheBudgetIsRefusedBeforeAnyWork) {
   ASSERT_EQ(outputLines(r).size(), 1u) << r.output;
   EXPECT_EQ(r.output.rfind("oitsim: error: " + trace + ": a 16384 x 16384 frame with abuffer needs about ", 0), 0u)
       << r.output;
-  EXPECT_NE(r.output.find("GiB at its peak (metrics), more than the memory budget of 8.00 GiB (--memory-budget 8G); "
+  EXPECT_NE(r.output.find("GiB at its peak (flip), more than the memory budget of 8.00 GiB (--memory-budget 8G); "
                           "--reference none skips the reference and the metrics; nothing was run"),
             std::string::npos)
       << r.output;

@@ -57,7 +57,7 @@ TEST_F(CliRun, FunctionalMlabHasErrorAndAbufferHasNone) {
   const std::string out = dir_->file("f_mlab");
   CliResult r = runOitsim("run --mode functional --algo mlab --layers 4 -q --trace " + trace_ + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"image.png", "image.pfm", "reference.pfm", "diff.png", "report.json"})
+  for (const char* f : {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "report.json"})
     EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;
   nlohmann::json j = readJson(out + "/report.json");
   EXPECT_GT(j["image"]["metrics"]["rmse"].get<double>(), 0.0);

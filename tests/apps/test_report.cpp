@@ -74,7 +74,12 @@ TEST_F(Report, GeneratorIoErrorIsOneLineAndTheRealExitCode) {
                           "/reports/make_report.py failed (exit code 1); " + sw + "/report.html was not written\n"),
             std::string::npos)
       << r.output;
-  EXPECT_EQ(lines(r.output).size(), 2u) << r.output;
+  // The merge's summary line and the script's progress lines ("report: ..."),
+  // then the script's error and oitsim's: one line each.
+  EXPECT_EQ(r.output.rfind("sweep: 2 points, 2 ok, 0 failed; results ", 0), 0u) << r.output;
+  size_t errors = 0;
+  for (const auto& l : lines(r.output)) errors += l.rfind("sweep: ", 0) != 0 && l.rfind("report: ", 0) != 0;
+  EXPECT_EQ(errors, 2u) << r.output;
   EXPECT_FALSE(fs::exists(sw + "/report.html"));
   EXPECT_FALSE(fs::exists(sw + "/report.html.tmp"));
 }
@@ -179,6 +184,11 @@ TEST(ReportSpeedModes, GroupsByEveryRopParameterAndErrorsAreSigned) {
     EXPECT_NEAR(row["cycle_err_pct"].get<double>(), want, 1e-9) << cfg << " " << row["mode"];
   }
   EXPECT_EQ(sp["modes"]["timing q=200 skip=on"]["groups"].get<int>(), 2);
+  // A numeric sweep axis gets its own line plot (cache.ways: 2, 8); the speed
+  // axis's labels are not numbers.
+  const std::string page = readText(dir.file("sw/report.html"));
+  EXPECT_NE(page.find("alt=\"glass: against cache.ways\""), std::string::npos);
+  EXPECT_EQ(page.find("against speed"), std::string::npos);
 }
 
 // The signed error of a speed mode, on a hand-made results set (a real sweep's

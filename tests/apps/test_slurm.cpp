@@ -124,6 +124,9 @@ class LocalSlurm {
     const auto [ctld_port, slurmd_port] = freePorts();
     if (!ctld_port || !slurmd_port) return "no free TCP port for slurmctld/slurmd";
     const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
+    // The node's memory in MiB, so that a job's --mem is checked against it
+    // (without RealMemory Slurm assumes 1 MiB and refuses any --mem).
+    const long long mem_mib = (long long)::sysconf(_SC_PHYS_PAGES) * ::sysconf(_SC_PAGESIZE) / (1024 * 1024);
     const std::string d = dir_.string();
     std::ofstream(dir_ / "slurm.conf") << "ClusterName=oitsimtest\n"
                                        << "SlurmctldHost=localhost\n"
@@ -144,7 +147,8 @@ class LocalSlurm {
                                        << "SlurmdPidFile=" << d << "/slurmd.pid\n"
                                        << "SlurmctldLogFile=" << d << "/slurmctld.log\n"
                                        << "SlurmdLogFile=" << d << "/slurmd.log\n"
-                                       << "NodeName=localhost CPUs=" << cpus << " State=UNKNOWN\n"
+                                       << "NodeName=localhost CPUs=" << cpus << " RealMemory=" << mem_mib
+                                       << " State=UNKNOWN\n"
                                        << "PartitionName=test Nodes=localhost Default=YES MaxTime=INFINITE State=UP\n";
     const std::string conf = (dir_ / "slurm.conf").string();
     if (const char* c = std::getenv("SLURM_CONF")) {
@@ -256,10 +260,17 @@ TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
   CliResult r = runOitsim("sweep " + spec + " --out " + (d / "local").string() + " --jobs 2 -q");
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
+  // Chunked: two points per array task, so task 0 runs points 0 and 1, task 1
+  // point 2; with the site options a cluster needs passed through.
   const fs::path out = d / "slurm";
-  r = runOitsim("sweep " + spec + " --out " + out.string() + " --emit slurm");
+  r = runOitsim("sweep " + spec + " --out " + out.string() +
+                " --emit slurm --points-per-task 2 --time 0:05:00 --mem 512M --partition test");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  ASSERT_NE(readText(out / "sweep.slurm").find("#SBATCH --array=0-2"), std::string::npos);
+  const std::string script = readText(out / "sweep.slurm");
+  ASSERT_NE(script.find("#SBATCH --array=0-1\n"), std::string::npos) << script;
+  ASSERT_NE(script.find("#SBATCH --time=0:05:00\n#SBATCH --mem=512M\n#SBATCH --partition=test\n"), std::string::npos)
+      << script;
+  ASSERT_EQ(readText(out / "slurm-tasks.txt"), "0 1\n2\n");
   ASSERT_FALSE(fs::exists(out / "points/0000-particles-mlab/report.json")) << "--emit must not run points";
 
   // Submit and wait (bounded): sbatch --wait exits with the array's highest task exit code.
@@ -269,9 +280,10 @@ TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
   if (!job.empty() && job.find_first_not_of("0123456789") == std::string::npos) cluster.setJob(job);
   ASSERT_EQ(rc, 0) << "sbatch --wait: " << sb << "\n" << tail(d / "slurmctld.log") << "\n" << tail(d / "slurmd.log");
   ASSERT_FALSE(job.empty()) << sb;
-  for (int task = 0; task < 3; ++task)
+  for (int task = 0; task < 2; ++task)
     EXPECT_TRUE(fs::exists(out / ("slurm-" + job + "_" + std::to_string(task) + ".log")))
         << "no Slurm log for task " << task;
+  EXPECT_FALSE(fs::exists(out / ("slurm-" + job + "_2.log"))) << "two tasks, not one per point";
 
   r = runOitsim("report -q " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -1,13 +1,10 @@
 // Helpers of the oit_rop timing tests. SystemC elaborates once per process, so
-// every timing run of a test happens in a forked child that sends back the
-// stats, counts and the raw image bytes.
+// every timing run of a test happens in a forked child (runTimingInChildren)
+// that sends back the stats, counts and the image.
 #pragma once
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,6 +12,7 @@
 
 #include "model/AlgoTestUtil.hpp"
 #include "model/MemorySource.hpp"
+#include "oit_rop/ChildRuns.hpp"
 #include "oit_rop/TimingRun.hpp"
 
 namespace oit::rop::testutil {
@@ -28,78 +26,16 @@ struct ChildRun {
 };
 
 inline ChildRun runInChild(const std::function<TimingResult()>& f) {
-  int fd[2];
-  if (pipe(fd) != 0) {
-    ChildRun failed;
-    failed.error = "pipe failed";
-    return failed;
-  }
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fd[0]);
-    std::string out;
-    try {
-      TimingResult r = f();
-      nlohmann::json c = {{"in", r.counts.fragments_in}, {"opaque", r.counts.opaque}, {"culled", r.counts.culled},
-                          {"stored", r.counts.stored}, {"merged", r.counts.merged},
-                          {"discarded", r.counts.discarded}, {"pass_outcomes", r.counts.pass_outcomes},
-                          {"bytes_read", r.counts.bytes_read}, {"bytes_written", r.counts.bytes_written},
-                          {"source_passes", r.counts.source_passes}};
-      nlohmann::json head = {{"ok", true}, {"stats", r.stats}, {"counts", c}, {"w", r.image.width}, {"h", r.image.height}};
-      const std::string hs = head.dump();
-      const uint64_t n = hs.size();
-      out.append(reinterpret_cast<const char*>(&n), 8);
-      out += hs;
-      out.append(reinterpret_cast<const char*>(r.image.pixels.data()), r.image.pixels.size() * sizeof(model::Rgb));
-    } catch (const std::exception& e) {
-      const std::string hs = nlohmann::json{{"ok", false}, {"error", e.what()}}.dump();
-      const uint64_t n = hs.size();
-      out.assign(reinterpret_cast<const char*>(&n), 8);
-      out += hs;
-    }
-    size_t off = 0;
-    while (off < out.size()) {
-      const ssize_t w = write(fd[1], out.data() + off, out.size() - off);
-      if (w <= 0) break;
-      off += size_t(w);
-    }
-    close(fd[1]);
-    _exit(0);
-  }
-  close(fd[1]);
-  std::string in;
-  char buf[1 << 16];
-  for (ssize_t r; (r = read(fd[0], buf, sizeof buf)) > 0;) in.append(buf, size_t(r));
-  close(fd[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
   ChildRun cr;
-  if (in.size() < 8) {
-    cr.error = "child died (status " + std::to_string(status) + ")";
-    return cr;
+  try {
+    std::vector<TimingResult> r = runTimingInChildren({[&](const auto&) { return f(); }}, {});
+    cr.ok = true;
+    cr.stats = std::move(r[0].stats);
+    cr.image = std::move(r[0].image);
+    cr.counts = r[0].counts;
+  } catch (const std::exception& e) {
+    cr.error = e.what();
   }
-  uint64_t n = 0;
-  std::memcpy(&n, in.data(), 8);
-  const auto head = nlohmann::json::parse(in.substr(8, n));
-  if (!head.at("ok").get<bool>()) {
-    cr.error = head.at("error").get<std::string>();
-    return cr;
-  }
-  cr.ok = true;
-  cr.stats = head.at("stats");
-  const auto& c = head.at("counts");
-  cr.counts.fragments_in = c.at("in");
-  cr.counts.opaque = c.at("opaque");
-  cr.counts.culled = c.at("culled");
-  cr.counts.stored = c.at("stored");
-  cr.counts.merged = c.at("merged");
-  cr.counts.discarded = c.at("discarded");
-  cr.counts.pass_outcomes = c.at("pass_outcomes").get<std::vector<std::array<uint64_t, model::kOutcomeCount>>>();
-  cr.counts.bytes_read = c.at("bytes_read");
-  cr.counts.bytes_written = c.at("bytes_written");
-  cr.counts.source_passes = c.at("source_passes");
-  cr.image = model::Image(head.at("w"), head.at("h"));
-  std::memcpy(cr.image.pixels.data(), in.data() + 8 + n, cr.image.pixels.size() * sizeof(model::Rgb));
   return cr;
 }
 

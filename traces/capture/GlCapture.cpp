@@ -10,11 +10,7 @@
 
 #include <fmt/format.h>
 
-#define EGL_EGLEXT_PROTOTYPES 1
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/glcorearb.h>
+#include "traces/capture/GlEntryPoints.hpp"
 
 #include "traces/gen/Backdrop.hpp"
 #include "traces/gen/Math.hpp"
@@ -22,6 +18,7 @@
 
 namespace oit::capture {
 
+using namespace gl;  // the entry points, loaded at run time (GlEntryPoints.hpp)
 using gen::Mat4;
 using gen::Vec3;
 
@@ -78,6 +75,7 @@ struct EglContext {
   EGLContext context = EGL_NO_CONTEXT;
 
   EglContext() {
+    if (const std::string& why = loadEntryPoints(); !why.empty()) throw GlError(why);
     const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     if (!client_ext) eglFail("eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS)", "no EGL client extensions");
     if (!std::strstr(client_ext, "EGL_MESA_platform_surfaceless"))

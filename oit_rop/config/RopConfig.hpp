@@ -1,0 +1,143 @@
+// Every parameter of the timing model, typed. The named property tree
+// (oit_rop/config/ConfigTree.hpp: defaults, units, descriptions, presets, JSON files,
+// --set a.b.c=value) reads and writes these fields; the model reads only this.
+// Defaults are the `igpu` preset (../shared/notes/hardware.md).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace oit::rop {
+
+enum class LockGranularity : uint8_t { Pixel, Quad, Tile };  // quad = 2x2 pixels
+enum class LockRelease : uint8_t { EndOfBlend, EndOfShader };
+// What the interlock guarantees (oit_rop/DESIGN.md, "Ordering"): ordered = each
+// lock address's fragments enter in submission order (ROV, PixelSync);
+// unordered = one at a time, in the order the timing model lets them in;
+// none = no interlock, racing read-modify-writes (lost updates counted).
+enum class LockMode : uint8_t { Ordered, Unordered, None };
+enum class LatencyModel : uint8_t { Fixed, Uniform };
+// cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
+enum class SimEngine : uint8_t { CycleStepped, Approximate };
+// The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
+// = a request whose data can go now may pass older ones (MEMORY.md).
+enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
+
+struct ClockConfig {
+  double core_mhz = 1150.0;  // ROP / core clock
+  bool operator==(const ClockConfig&) const = default;
+};
+
+struct PartitionConfig {
+  unsigned count = 2;         // ROP partitions; the screen is split into interleaved tiles
+  unsigned tile_width = 8;    // pixels; one tile = one blending-array cache line
+  unsigned tile_height = 8;
+  bool operator==(const PartitionConfig&) const = default;
+};
+
+struct InputConfig {
+  double fragments_per_clock = 2.0;  // per partition, into the pixel shader
+  LatencyModel latency_model = LatencyModel::Uniform;
+  unsigned latency_min = 40;  // cycles of pixel-shader latency (fixed model: latency_min)
+  unsigned latency_max = 120;
+  unsigned warp_size = 1;     // consecutive fragments (by sequence number) sharing one latency draw; power of two
+  uint64_t seed = 1;          // latency distribution seed
+  bool operator==(const InputConfig&) const = default;
+};
+
+struct EarlyDepthConfig {
+  bool enabled = true;        // cull transparent fragments at/behind the opaque depth before the lock
+  bool hierarchical = true;   // per-tile max opaque depth culls without reading the depth buffer
+  unsigned latency = 4;       // cycles
+  bool operator==(const EarlyDepthConfig&) const = default;
+};
+
+struct LockConfig {
+  unsigned capacity = 256;                // scoreboard entries (fragments in flight between issue and release)
+  LockGranularity granularity = LockGranularity::Pixel;
+  LockMode mode = LockMode::Ordered;      // ordered, unordered or no interlock
+  bool per_primitive = true;              // quad/tile: one primitive's fragments hold the lock together
+  LockRelease release = LockRelease::EndOfBlend;
+  unsigned shader_tail = 20;              // cycles from end of blend to end of shader (EndOfShader release)
+  bool operator==(const LockConfig&) const = default;
+};
+
+struct CacheConfig {
+  uint64_t size_bytes = 64 * 1024;   // blending-array tile cache per partition (igpu: 2 x 64 KiB)
+  unsigned ways = 8;
+  unsigned miss_queue = 16;          // outstanding line fills
+  unsigned hit_latency = 10;         // cycles
+  bool operator==(const CacheConfig&) const = default;
+};
+
+struct AluConfig {
+  unsigned blends_per_clock = 2;  // RGBA8-rate blends per clock per partition
+  unsigned base_latency = 8;      // cycles of one insert
+  unsigned row_latency = 2;       // extra cycles per row read-modify-written
+  double fp16_rate = 0.5;         // throughput relative to 8-bit rows
+  double fp32_rate = 0.25;
+  bool operator==(const AluConfig&) const = default;
+};
+
+struct DramConfig {
+  unsigned channels = 2;
+  double channel_gbps = 12.8;       // GB/s per channel (DDR3-1600, 64-bit)
+  double tck_ns = 1.25;             // DRAM clock period
+  unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
+  unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
+  unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
+  unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
+  unsigned banks = 8;
+  unsigned row_bytes = 8192;        // row-buffer size per bank
+  unsigned burst_bytes = 64;        // access granularity
+  unsigned interleave_bytes = 256;  // channel interleave
+  bool open_row = true;             // keep rows open (hits pay CL only); false: closed page
+  bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
+  double controller_ns = 40.0;      // fixed controller + interconnect latency
+  double trefi_ns = 7800.0;         // refresh interval per channel (0: no refresh); DDR3, <= 85 C
+  double trfc_ns = 260.0;           // refresh cycle time: no data moves, rows close; DDR3 4 Gb
+  unsigned write_queue = 64;        // posted-write entries (bursts) per channel
+  unsigned write_high = 56;         // waiting write bursts that start a drain
+  unsigned write_low = 32;          // a drain stops at or below this
+  DramScheduler scheduler = DramScheduler::FrFcfs;
+  unsigned queue_depth = 64;        // bursts per channel the FR-FCFS scheduler looks over
+  bool operator==(const DramConfig&) const = default;
+};
+
+struct StatsConfig {
+  uint64_t interval_cycles = 10000;  // time-series sample period
+  uint64_t max_samples = 16384;      // more: the period doubles (pairs of samples merge)
+  bool operator==(const StatsConfig&) const = default;
+};
+
+struct SkipConfig {
+  bool early_depth = true;   // cull before the lock (else culled fragments pass through lock and cache)
+  bool fast_clear = true;    // untouched tiles neither read from DRAM, cleared nor resolved
+  bool lazy_merge = true;    // no merge work while a pixel's array is not full
+  bool idle_cycles = true;   // the simulator jumps over cycles where nothing can move
+  bool operator==(const SkipConfig&) const = default;
+};
+
+struct SimConfig {
+  uint64_t quantum_cycles = 200;  // tlm_quantumkeeper quantum (within ~1 % of lockstep: DESIGN.md)
+  SimEngine engine = SimEngine::CycleStepped;
+  bool operator==(const SimConfig&) const = default;
+};
+
+struct RopConfig {
+  std::string preset = "igpu";
+  ClockConfig clock;
+  PartitionConfig partitions;
+  InputConfig input;
+  EarlyDepthConfig early_depth;
+  LockConfig lock;
+  CacheConfig cache;
+  AluConfig alu;
+  DramConfig dram;
+  StatsConfig stats;
+  SkipConfig skip;
+  SimConfig sim;
+  bool operator==(const RopConfig&) const = default;
+};
+
+}  // namespace oit::rop

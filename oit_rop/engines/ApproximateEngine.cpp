@@ -1,0 +1,267 @@
+#include "oit_rop/engines/ApproximateEngine.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+#include <vector>
+
+#include "oit_rop/RopPartition.hpp"
+
+namespace oit::rop {
+
+void ApproximateEngine::run() {
+  RopPartition& p = p_;
+  // One visit per fragment in issue order (= submission order within the
+  // partition). Each stage's time follows from when the fragment reaches it
+  // and when the resource it needs is free: scoreboard entry (earliest
+  // release among those in flight), shader latency (the same draw as the
+  // cycle engine), depth tile (EarlyDepth's buffer and DRAM), lock address
+  // (ReleaseTable), cache line (BlendArrayCache and DRAM), blend slot (ALU
+  // throughput, in issue order). Differences from the cycle engine: DESIGN.md.
+  //
+  // The loop keeps its state (timelines, stage accounts, counters, settings)
+  // in locals and writes it back after the phase: every store through a
+  // pointer (a table entry, a unit's statistic) may alias a member of the same
+  // type, so state kept in members was reloaded after each such store.
+  constexpr unsigned kShift = RateLimiter::kShift;
+  constexpr int64_t kOne = RateLimiter::kOne;
+  constexpr size_t kLookahead = 8;  // records ahead whose lock entry is prefetched
+  constexpr size_t kStages = 5;     // every stage but the resolve
+  p.flushAccounts();  // every stage idle up to here; the timelines account the phase
+  const Cycle start = p.now_;
+  std::array<StageTimeline, kStages> tl;
+  tl.fill(StageTimeline(start));
+  std::array<StageCycles, kStages> acc;
+  std::array<uint64_t, kStages> total_at_start;  // stages 1-4 account their gaps at the end
+  for (size_t i = 0; i < kStages; ++i) {
+    acc[i] = p.res_.accounts.stage[i];
+    total_at_start[i] = acc[i].total();
+  }
+  constexpr StageStatus kBusy = StageStatus::busy();
+  const bool grouped = p.cfg_.lock.per_primitive && p.cfg_.lock.granularity != LockGranularity::Pixel;
+  ReleaseTable locks(p.owned_.size() * p.geo_.lock_per_tile, grouped);
+  const unsigned cap = p.cfg_.lock.capacity;
+  scoreboard_.reset(p.now_);
+  waiting_.reset(p.now_);
+  // Issue and blend slots in 1/kOne cycles (rates need not be integers).
+  const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / p.cfg_.input.fragments_per_clock));
+  const double alu_rate = std::max(1e-6, double(p.cfg_.alu.blends_per_clock) * p.s_.format_rate);
+  const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
+  int64_t issue_fx = int64_t(p.now_) << kShift, alu_fx = 0;
+  const Cycle tail = p.cfg_.lock.release == LockRelease::EndOfShader ? p.cfg_.lock.shader_tail : 0;
+  const Cycle depth_latency = p.cfg_.early_depth.latency, hit_latency = p.cfg_.cache.hit_latency;
+  // A culled fragment leaves at early depth when early culling is on: its
+  // flag masked by this (one test per visit instead of two).
+  const uint8_t leaves_early = p.early_cull_ ? InRec::kCulled : 0;
+  // What a fragment that reaches the lock does follows from its kind,
+  // culled x 4 + outcome: its blend latency, whether it writes its line and
+  // whether it appends an A-buffer node. Visits are tallied by kind, and
+  // the ALU's counts and the skips' follow from the tallies after the phase.
+  constexpr unsigned kKinds = 8;
+  static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
+  std::array<uint64_t, kKinds> visits{};
+  std::array<Cycle, kKinds> blend_latency{};
+  std::array<uint8_t, kKinds> writes{}, appends{};
+  for (unsigned k = 0; k < kKinds; ++k) {
+    const bool culled = k >= 4;
+    const unsigned outcome = k & 3;
+    blend_latency[k] = p.alu_.latencyOf(culled ? 0u : p.rows_of_[outcome]);
+    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
+    appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
+  }
+  ShaderInput::Draw latency = p.shader_.draw(p.pass_);
+  LockStats ls = lock_stats_;
+  uint64_t culled_early = 0, fragments = 0, depth_reads_needed = 0;
+  Cycle last_release = p.now_, last_finish = p.now_;
+  StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
+  std::vector<Cycle> fill_ready(p.geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
+  // The input queue through a cursor: its head goes back to the queue before
+  // anything else may read it (a refill, a yield, a waiting front end), and a
+  // new cursor is taken after anything may have pushed to it.
+  auto& q = p.front_.queue(p.id_);
+  auto in = q.cursor();
+  for (;;) {
+    if (in.empty()) {
+      q.setHead(in);
+      p.refillInput();
+      in = q.cursor();
+      if (in.empty()) {
+        if (!p.starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", p.id_));
+        retireCalendars(p.now_);
+        p.waitForFrontEnd();
+        in = q.cursor();
+        issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
+        gap0 = StageStatus::stall(Stall::InputStarved);
+        continue;
+      }
+    }
+    const InRec r = in.front();  // a copy: p.advance() lets other partitions refill (and grow) the queue
+    // The record further ahead, its lock entry and cache line index nearer.
+    // Slots past the tail hold older records of this partition (or zeros):
+    // their lock addresses and tiles are in the tables too, so no test of the
+    // queue's size is needed for a hint.
+    __builtin_prefetch(&in.at(2 * kLookahead));
+    const InRec& ahead = in.at(kLookahead);
+    locks.prefetch(ahead.lock);
+    p.cache_.prefetch(ahead.tile);
+    if (r.flags & InRec::kPassEnd) [[unlikely]] {
+      // Pass p+1 starts after pass p drained.
+      in.pop();
+      q.setHead(in);
+      retireCalendars(p.now_);
+      if (last_release > p.now_) p.advance(last_release, false);
+      in = q.cursor();
+      issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
+      scoreboard_.reset(p.now_);
+      waiting_.reset(p.now_);
+      p.res_.pass_end.push_back(p.now_);
+      gap0 = StageStatus::idle();
+      if (++p.pass_ == p.front_.passes()) break;
+      latency = p.shader_.draw(p.pass_);
+      continue;
+    }
+    // Scoreboard entry: when every one is in use, the earliest release frees one.
+    // The calendars retire lazily: only when the sampler may read them (before
+    // a yield), for a new peak, and here: releases at or before p.now_ (which
+    // free nothing later than fx) are dropped a cycle at a time until the
+    // scoreboard is not full or its earliest release is still in flight.
+    int64_t fx = issue_fx;
+    while (scoreboard_.size() >= cap) {
+      if (scoreboard_.dropDue(p.now_)) continue;
+      const int64_t freed = int64_t(scoreboard_.popEarliest()) << kShift;
+      if (freed > fx) {
+        fx = freed;
+        gap0 = StageStatus::stall(Stall::ScoreboardFull);
+      }
+    }
+    const Cycle issue = Cycle(fx >> kShift);
+    issue_fx = fx + in_step;
+    if (issue > p.now_) {
+      if (issue >= p.next_sync_) {  // p.advance() yields: the sampler reads the calendars, the front end the queue
+        retireCalendars(p.now_);
+        q.setHead(in);
+        p.advance(issue, false);
+        in = q.cursor();
+      } else {
+        p.advance(issue, false);
+      }
+    }
+    tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
+    gap0 = kBusy;
+
+    const Cycle finish = issue + latency(r.seq);
+    last_finish = std::max(last_finish, finish);
+    const Cycle passed = finish + depth_latency;
+    // Memory-side resources (depth-tile buffer, blend-array cache, DRAM) see
+    // the fragment at its visit (issue) cycle, so their requests are booked in
+    // time order; the latency they return counts from the fragment's own time.
+    // (Its counts tallied: every visit is tested, those without a read were
+    // decided by the HiZ.)
+    Cycle early = passed;
+    if (r.flags & InRec::kNeedsDepthRead) {
+      ++depth_reads_needed;
+      early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+    }
+    tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
+    if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
+    Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
+    if (r.flags & leaves_early) {
+      ++culled_early;
+    } else {
+      const Cycle free = grouped ? locks.enterAfter(r.lock, r.seq - r.prim_offset) : locks.lastRelease(r.lock);
+      Cycle enter = early;
+      if (free > early) {
+        ++ls.conflicts;
+        ls.wait_cycles += free - early;
+        ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
+        enter = free;
+        waiting_.push(enter);
+        // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
+        tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
+      }
+      const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
+      ++visits[kind];
+      const bool write = writes[kind];
+      const Cycle lock_enter = enter;
+      // Into the cache the next cycle when admitted on arrival, in the release's
+      // own cycle when admitted at one (the cycle engine's stage order).
+      enter += free > early ? 0 : 1;
+      // The cache in the visit's frame too (see early depth). A miss's fill
+      // counts from the fragment's lock entry; a hit on a line whose fill was
+      // in flight waits for that fill's own time (fill_ready), not shifted by
+      // its lock wait, which already covered the older fragment that missed.
+      Cycle at_cache = issue;
+      bool missed;
+      Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
+      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
+        if (p.cache_.refusedBySet())  // touch() pins no line
+          throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
+        at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
+        got = p.cache_.touch(at_cache, r.tile, write, missed);
+      }
+      enter += at_cache - issue;  // waited for a miss-queue entry
+      Cycle ready = enter + hit_latency;
+      if (missed) {
+        ready = got + (enter - at_cache);
+        fill_ready[r.tile] = ready;
+      } else if (got > at_cache + hit_latency) {
+        ready = std::max(ready, fill_ready[r.tile]);
+      }
+      const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
+      if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
+      tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
+      const bool miss = ready > enter + hit_latency;
+      tl[3].addLeavingGap(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
+      const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
+      alu_fx = slot + alu_step;
+      const Cycle at = Cycle(slot >> kShift);
+      if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
+      const Cycle done = at + blend_latency[kind];
+      tl[4].addLeavingGap(acc[4], at, done, kBusy);
+      if (appends[kind]) p.nodeWrite();
+      release = done + tail;
+      locks.released(r.lock, release);
+    }
+    last_release = std::max(last_release, release);
+    scoreboard_.push(release);
+    if (scoreboard_.size() > ls.peak_occupancy) {  // perhaps a new peak: count only those in flight
+      scoreboard_.retire(p.now_);
+      ls.peak_occupancy = std::max(ls.peak_occupancy, uint32_t(scoreboard_.size()));
+    }
+    in.pop();
+    if (p.front_.hasWaiters()) {
+      q.setHead(in);
+      p.front_.popped(p.id_);
+    }
+    ++fragments;
+  }
+  // Shader busy until the last fragment left it; then every stage idle to the drain.
+  tl[0].close(acc[0], last_finish, kBusy);
+  for (size_t i = 0; i < kStages; ++i) {
+    if (i > 0) tl[i].addGaps(acc[i], start, total_at_start[i]);
+    tl[i].close(acc[i], p.now_, StageStatus::idle());
+    p.res_.accounts.stage[i] = acc[i];
+    p.since_[i] = p.now_;  // (Resolve: idle through the phase, accounted when its status changes)
+  }
+  for (unsigned k = 0; k < kKinds; ++k) {  // every visit arrived at the lock and entered it
+    ls.arrivals += visits[k];
+    ls.entries += visits[k];
+  }
+  lock_stats_ = ls;
+  for (unsigned k = 0; k < kKinds; ++k) {
+    const bool culled = k >= 4;
+    p.alu_.countMany(culled ? 0u : p.rows_of_[k & 3], culled, visits[k]);
+    if (culled) p.res_.culled_late += visits[k];
+  }
+  if (p.merge_skip_) p.res_.merges_skipped += visits[unsigned(model::InsertOutcome::Stored)];
+  p.res_.culled_early += culled_early;
+  p.res_.fragments += fragments;
+  p.early_.countTests(fragments, fragments - depth_reads_needed);
+  scoreboard_.reset(p.now_);
+  waiting_.reset(p.now_);
+}
+
+
+}  // namespace oit::rop

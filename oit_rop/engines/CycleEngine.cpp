@@ -1,0 +1,243 @@
+#include "oit_rop/engines/CycleEngine.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "oit_rop/RopPartition.hpp"
+
+namespace oit::rop {
+
+CycleEngine::CycleEngine(RopPartition& partition) : p_(partition) {}
+
+void CycleEngine::run() {
+  if (p_.rmw_) {
+    while (step<true>()) {
+    }
+  } else {
+    while (step<false>()) {
+    }
+  }
+}
+
+template <bool Deferred>
+bool CycleEngine::step() {
+  RopPartition& p = p_;
+  const Cycle now = p.now_;
+  bool moved = false;
+
+  // BlendAlu completions: release the lock now (end of blend) or after the
+  // rest of the shader (end of shader).
+  p.alu_.complete(now, [&](uint32_t t) {
+    moved = true;
+    const RopPartition::TokenInfo& k = p.tok_[t];
+    if constexpr (Deferred) {
+      if (!(k.flags & InRec::kCulled)) p.rmw_->complete(t);  // none: the write lands
+    }
+    p.releaseLine(k.tile);  // the blend wrote the line: it may be evicted now
+    if (!p.s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
+      p.nodeWrite();
+    if (p.cfg_.lock.release == LockRelease::EndOfShader)
+      p.tail_q_.push({now + p.cfg_.lock.shader_tail, t});
+    else
+      p.lock_.release(now, t);
+  });
+  while (!p.tail_q_.empty() && p.tail_q_.front().first <= now) {
+    p.lock_.release(now, p.tail_q_.front().second);
+    p.tail_q_.pop();
+    moved = true;
+  }
+
+  // BlendArrayCache pipeline -> BlendAlu (in order).
+  // (Rate limiters are asked only when something could pass: their credit
+  // accrues the same whether or not they are asked every cycle.)
+  const unsigned alu_slots = !p.cache_q_.empty() && p.cache_q_.front().ready <= now ? p.alu_.slots(now) : 0;
+  unsigned to_alu = 0;
+  bool alu_blocked = false;
+  while (!p.cache_q_.empty() && p.cache_q_.front().ready <= now) {
+    if (to_alu >= alu_slots) {
+      alu_blocked = true;
+      break;
+    }
+    const RopPartition::CacheEntry e = p.cache_q_.front();
+    p.cache_q_.pop();
+    const RopPartition::TokenInfo& k = p.tok_[e.token];
+    const bool drop = (k.flags & InRec::kCulled) != 0;  // late cull: the blend drops it
+    p.res_.culled_late += drop;
+    p.alu_.issue(now, e.token, drop ? 0u : k.rows, drop);
+    ++to_alu;
+  }
+
+  // PixelLock -> BlendArrayCache: admitted fragments access their tile's line.
+  unsigned accepted = 0;
+  bool refused = false;
+  while (p.lock_.hasReady() && accepted < p.cache_ports_) {
+    const uint32_t t = p.lock_.frontReady();
+    RopPartition::TokenInfo& k = p.tok_[t];
+    if constexpr (Deferred) {
+      // The insert, when the fragment first reaches the cache port. (A refused
+      // access retries with the outcome it has: its tile is not resident, so no
+      // fragment in flight can write its pixel meanwhile.)
+      if (k.flags & InRec::kDeferredInsert) {
+        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, k.tile);
+        k.outcome = uint8_t(o);
+        k.rows = p.rows_of_[size_t(o)];
+        k.flags &= uint8_t(~InRec::kDeferredInsert);
+        p.res_.merges_skipped += unsigned((o == model::InsertOutcome::Stored) & p.merge_skip_);
+      }
+    }
+    const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    Cycle r = 0;
+    if (!p.acquireGated(now, k.tile, write, r)) {
+      refused = true;
+      break;
+    }
+    p.lock_.enterFront(now);
+    const bool miss = r > now + p.cfg_.cache.hit_latency;
+    p.cache_q_.push({t, r, miss});
+    ++accepted;
+  }
+
+  // EarlyDepth -> PixelLock (or out, when culled early).
+  const unsigned left = p.early_.leave(now, [&](uint32_t t) {
+    const RopPartition::TokenInfo& k = p.tok_[t];
+    if ((k.flags & InRec::kCulled) && p.early_cull_) {
+      ++p.res_.culled_early;
+      p.lock_.drop(now, t);
+    } else {
+      p.lock_.arrive(now, t);
+    }
+  });
+
+  // Shader -> EarlyDepth.
+  unsigned shaded = 0;
+  p.shader_.finished(now, [&](uint32_t t) {
+    ++shaded;
+    p.early_.push(now, t, p.tok_[t].tile, (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
+  });
+
+  // Issue from the routed input into the shader (needs a scoreboard entry).
+  auto& q = p.front_.queue(p.id_);
+  unsigned issued = 0;
+  bool sb_full = false, draining = false;
+  p.starving_ = false;
+  if (q.empty()) p.refillInput();  // eagerly, so the input's state never depends on skipped cycles
+  // A full scoreboard blocks a fragment at the head whatever the issue rate.
+  // (Bitwise: front() of an empty Fifo is a stale slot, masked by !q.empty().)
+  const bool blocked = !q.empty() & !(q.front().flags & InRec::kPassEnd) & p.lock_.full();
+  const unsigned slots = blocked ? 0 : p.shader_.slots(now);
+  while (issued < slots) {
+    if (q.empty()) {
+      p.refillInput();
+      if (q.empty()) break;
+    }
+    const InRec& r = q.front();
+    if (r.flags & InRec::kPassEnd) {
+      if (p.lock_.occupancy() != 0) {
+        draining = true;  // pass p+1 starts after pass p drained
+        break;
+      }
+      q.pop();
+      p.res_.pass_end.push_back(now);
+      moved = true;
+      if (++p.pass_ == p.front_.passes()) return false;
+      continue;
+    }
+    if (p.lock_.full()) {
+      sb_full = true;
+      break;
+    }
+    // The partition's own lock address (FrameGeometry::lockAddress); owner: the primitive run's first record.
+    const uint32_t t = p.lock_.allocate(r.lock, r.seq - r.prim_offset);
+    const bool culled = (r.flags & InRec::kCulled) != 0;
+    // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
+    const uint8_t rows = culled ? 0 : p.rows_of_[r.outcome & 3];
+    if constexpr (Deferred) {
+      if (r.flags & InRec::kDeferredInsert) {  // its outcome and rows come at lock entry
+        Fifo<Fragment>& fq = p.front_.deferred(p.id_);
+        p.rmw_->hold(t, fq.front());
+        fq.pop();
+      }
+    } else {
+      p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
+    }
+    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, rows};
+    p.shader_.issue(now, t, r.seq, p.pass_);
+    q.pop();
+    p.front_.popped(p.id_);
+    ++p.res_.fragments;
+    ++issued;
+  }
+  // Bitwise, not short-circuit: each of these is data-dependent and would be a
+  // (often mispredicted) branch.
+  moved |= (to_alu | accepted | left | shaded | issued) != 0;
+  // Input waiting without a free entry (also when no issue slot this cycle).
+  sb_full |= !issued & !q.empty() & !(q.front().flags & InRec::kPassEnd) & p.lock_.full();
+
+  // Status of every stage in this cycle (holds until the next evaluated cycle),
+  // one byte per stage; the accounts are touched only for stages whose status
+  // changed (most evaluated cycles change none or one).
+  constexpr uint8_t kIdle = RopPartition::code(StageStatus::idle()), kBusy = RopPartition::code(StageStatus::busy());
+  constexpr auto stall = [](Stall c) { return RopPartition::code(StageStatus::stall(c)); };
+  const bool in_shader = p.shader_.inShader() != 0;
+  const bool in_early = p.early_.size() != 0;
+  uint8_t c0, c1, c2, c3, c4;
+  if (issued) c0 = kBusy;
+  else if (sb_full) c0 = stall(Stall::ScoreboardFull);
+  else if (p.starving_) c0 = stall(Stall::InputStarved);
+  else c0 = in_shader ? kBusy : kIdle;
+
+  if (p.early_.headWaitsForDepth(now) && !left) c1 = stall(Stall::CacheMissWait);
+  else if (left || in_early) c1 = kBusy;
+  else c1 = in_shader ? stall(Stall::InputStarved) : kIdle;
+
+  if (accepted) c2 = kBusy;
+  else if (refused) c2 = stall(Stall::CacheMissWait);
+  else if (p.lock_.waiting()) c2 = stall(Stall::LockWait);
+  else c2 = in_shader || in_early ? stall(Stall::InputStarved) : kIdle;
+
+  const bool occupied = p.lock_.occupancy() != 0;
+  const bool head_waits = !p.cache_q_.empty() && p.cache_q_.front().ready > now;
+  if (to_alu || accepted || (head_waits && !p.cache_q_.front().miss)) c3 = kBusy;
+  else if (refused || head_waits) c3 = stall(Stall::CacheMissWait);
+  else if (alu_blocked) c3 = stall(Stall::AluBusy);
+  else c3 = occupied ? stall(Stall::InputStarved) : kIdle;
+
+  if (to_alu || p.alu_.inFlight()) c4 = kBusy;
+  else c4 = occupied ? stall(Stall::InputStarved) : kIdle;
+  // (Resolve stays idle through the transparent phase.)
+  const uint64_t codes = uint64_t(c0) | uint64_t(c1) << 8 | uint64_t(c2) << 16 | uint64_t(c3) << 24 | uint64_t(c4) << 32;
+  if (codes != (p.codes_ & 0xFFFFFFFFFFull)) p.setStatuses(codes, 5);
+
+  // Next cycle at which any stage can move.
+  Cycle next = now + 1;
+  if (!moved) {
+    const Cycle ev = nextEvent(refused, sb_full, draining);
+    if (ev == kNever) {
+      if (!p.starving_) throw std::logic_error(fmt::format("partition {}: nothing can move at cycle {}", p.id_, now));
+      p.waitForFrontEnd();
+      return true;
+    }
+    if (p.cfg_.skip.idle_cycles) next = std::max(ev, now + 1);
+  }
+  p.advance(next, true);
+  return true;
+}
+
+
+Cycle CycleEngine::nextEvent(bool refused, bool sb_full, bool draining) {
+  RopPartition& p = p_;
+  const Cycle now = p.now_;
+  Cycle next = std::min({p.shader_.nextFinish(now), p.early_.nextEvent(now), p.alu_.nextCompletion()});
+  if (!p.tail_q_.empty()) next = std::min(next, p.tail_q_.front().first);
+  if (!p.cache_q_.empty())
+    next = std::min(next, p.cache_q_.front().ready > now ? p.cache_q_.front().ready : p.alu_.nextSlot(now));
+  if (p.lock_.hasReady()) next = std::min(next, refused ? p.retry_at_ : now + 1);
+  if (!p.front_.queue(p.id_).empty() && !sb_full && !draining) next = std::min(next, p.shader_.nextSlot(now));
+  if (draining && p.lock_.occupancy() == 0) next = now + 1;
+  return next;
+}
+
+
+}  // namespace oit::rop
