@@ -292,8 +292,11 @@ void runReplay(RunArgs& a) {
     }
   }
   if (!a.vcd.empty()) {
+    // The VCD likewise: an earlier run's (a regular file; nothing else is
+    // touched) and what a killed run left staged.
     const fs::path vcd_file(rop::vcdFilePath(a.vcd));
     removeAbandonedOutputs(vcd_file.parent_path(), {vcd_file.filename().string()});
+    if (fs::is_regular_file(fs::symlink_status(vcd_file, ec))) fs::remove(vcd_file, ec);
   }
   checkOptions(a);
   a.params.format = model::parseStorageFormat(a.format);
@@ -310,9 +313,6 @@ void runReplay(RunArgs& a) {
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(fmt::format("--vcd {}: {}", a.vcd, e.what()));
     }
-    // The VCD is written under a staged name and renamed at the end: an
-    // earlier run's at the path goes now, as the run's other outputs went.
-    fs::remove(rop::vcdFilePath(a.vcd), ec);
   }
 
   auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
