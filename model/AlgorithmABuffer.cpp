@@ -19,8 +19,16 @@ class ABuffer final : public OitAlgorithm {
   std::string_view name() const override { return "abuffer"; }
   bool bounded() const override { return false; }
   uint64_t poolBytes() const override { return uint64_t(pool_.size()) * sizeof(Node); }
+  uint64_t poolBytesPerFragment() const override { return sizeof(Node); }
+  void reservePool(uint64_t fragments) override {
+    if (fragments > kNil) throw std::length_error("abuffer: node pool exceeds 2^32 - 1 nodes");
+    if (fragments > pool_.capacity()) {
+      pool_ = std::vector<Node>();  // free first: the old nodes need no copy
+      pool_.reserve(size_t(fragments));
+    }
+  }
 
-  void beginFrame(const TraceHeader&) override { pool_.clear(); }
+  void beginFrame(const TraceHeader&) override { pool_.clear(); }  // keeps the capacity reservePool made
   void clear(uint32_t* w) override { w[0] = kNil; }
 
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {

@@ -430,7 +430,8 @@ TEST(ConfigTree, CrossFieldValidation) {
 }
 
 TEST(ConfigTree, CacheGeometry) {
-  const CacheConfig& igpu = ConfigTree::forPreset("igpu").config().cache;
+  // A copy: a reference into forPreset()'s temporary would dangle (ASan).
+  const CacheConfig igpu = ConfigTree::forPreset("igpu").config().cache;
   const CacheGeometry g = cacheGeometry(igpu, 64 * 16);  // 8x8 tile, 16 bytes per pixel
   EXPECT_EQ(g.ways, 8u);
   EXPECT_EQ(g.sets, 8u);
@@ -634,7 +635,9 @@ TEST(ConfigTree, RateAndBandwidthBounds) {
   ConfigTree t = ConfigTree::forPreset("igpu");
   for (const auto& [path, bad] : {std::pair{"input.fragments_per_clock", "0.0001"}, std::pair{"alu.fp32_rate", "0.0005"},
                                   std::pair{"dram.channel_gbps", "0.01"}, std::pair{"clock.core_mhz", "0.5"}}) {
-    const std::string e = errorOf([&] { t.set(path, bad); });
+    const char* p = path;  // clang 14 cannot capture a structured binding
+    const char* v = bad;
+    const std::string e = errorOf([&] { t.set(p, v); });
     EXPECT_NE(e.find(path), std::string::npos) << e;
     EXPECT_NE(e.find("out of range"), std::string::npos) << e;
   }
