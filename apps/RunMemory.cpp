@@ -186,7 +186,7 @@ RunMemoryEstimate estimateRunMemory(const RunShape& s, uint64_t base, uint64_t b
   // The run: opaque layer, per-pixel state, pool, its image; the timing
   // model's own tables.
   uint64_t render = opaque + s.bytes_per_pixel * px + pool + image + kReaderBytes;
-  if (s.timing) render += kTimingBytesPerPixel * px + kTimingBytes;
+  if (s.timing) render += kTimingBytesPerPixel * px + kTimingBytes + s.timing_level_bytes;
   // --seeds N: children simulate (each a whole run, in its own process, a
   // fork of this one) and send back their images, which this process keeps to
   // the end (and seed 0's once more as the run's own); flicker's sRGB8 codes

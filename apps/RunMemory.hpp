@@ -51,6 +51,7 @@ struct RunShape {
   uint64_t bytes_per_pixel = 0;  // the algorithm's per-pixel state
   uint64_t pool_bytes_per_fragment = 0;  // the A-buffer's node, 0 for the bounded algorithms
   bool timing = false;
+  uint64_t timing_level_bytes = 0;  // the shared cache levels' host tables (CacheLevel::hostBytesBound)
   ReferenceKind reference = ReferenceKind::Exact;
   bool run_is_reference = false;  // --algo abuffer: the run is its own reference
   unsigned seeds = 0;           // --seeds N: the parent keeps every seed's image (0: one run, in this process)

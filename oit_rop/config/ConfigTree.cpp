@@ -290,7 +290,11 @@ const std::vector<Property>& registry() {
               "(even; an odd value counts as the next lower even one)"),
       boolean("stats.miss_classes", &R::stats, &StatsConfig::miss_classes,
               "classify the ROP cache's misses as compulsory, capacity or conflict (a fully associative shadow "
-              "cache, updated on every line access; the shared levels always classify theirs)"),
+              "cache, updated on every line access; the shared levels': stats.level_miss_classes)"),
+      boolean("stats.level_miss_classes", &R::stats, &StatsConfig::level_miss_classes,
+              "classify the shared levels' (l2, l3) misses as well (a fully associative shadow of each level's "
+              "lines, 2 M for a 128 MB l3: 28 % of the approximate engine's time on the bench trace, "
+              "bench/RESULTS-timing.md; off, their report says miss_classes false and gives no split)"),
 
       boolean("skip.early_depth", &R::skip, &SkipConfig::early_depth,
               "culled fragments skip lock and cache (else they pass through both)"),
