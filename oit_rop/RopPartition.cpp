@@ -15,7 +15,6 @@ namespace oit::rop {
 namespace {
 constexpr unsigned kResolvePrefetch = 8;  // tiles whose lines are fetched ahead of the resolve
 constexpr Cycle kPostedWindow = 1024;     // posted DRAM writes may run this far ahead
-constexpr uint32_t kNodeBytes = 12;       // A-buffer node as published: rgba8 + z32 + next32
 uint8_t dummy_data[1];
 }  // namespace
 
@@ -36,15 +35,13 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       lock_(cfg_.lock),
       cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear,
              geo_.local),
-      alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
+      alu_(cfg_.alu, setup.format_rate),
       tok_(cfg_.lock.capacity),
       cache_q_(256),
       tail_q_(256),
       memory_(memory) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
-  for (unsigned o = 0; o < model::kOutcomeCount; ++o)
-    rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
@@ -149,8 +146,8 @@ void RopPartition::opaquePhase() {
 void RopPartition::nodeWrite() {
   // Nodes are appended to the partition's pool region; consecutive appends
   // coalesce into burst-sized DRAM writes.
-  node_pending_ += kNodeBytes;
-  res_.node_bytes_written += kNodeBytes;
+  node_pending_ += s_.node_bytes;
+  res_.node_bytes_written += s_.node_bytes;
   const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
   while (node_pending_ >= burst) {
     access(now_, node_addr_, burst, true, Surface::BlendArrays);
@@ -166,6 +163,58 @@ void RopPartition::waitForFrontEnd() {
   wait(front_.drained());
   const Cycle t = clock_.cycle(sc_core::sc_time_stamp());
   if (t > now_) advance(t, false);
+}
+
+// The A-buffer resolve's list walk over one tile (Yang et al. 2010): every
+// pixel follows its list from the head, each node's read waiting for the
+// previous node's pointer, so a list of n nodes is n dependent reads; the
+// tile's pixels walk side by side (one read per pixel and step, each node
+// scattered in the pool, a burst of its own). Then each pixel sorts what it
+// loaded (insertion sort, abuffer.sort_cycles_per_*; nodes past
+// abuffer.max_sorted spill at abuffer.spill_cycles_per_node, or are ignored
+// with truncate).
+RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready) {
+  const FrontEnd::PixelState px = front_.pixelState();
+  const uint32_t tx = tile % geo_.tiles_x, ty = tile / geo_.tiles_x;
+  const uint32_t x0 = tx * geo_.tile_w, y0 = ty * geo_.tile_h;
+  const uint32_t x1 = std::min(geo_.width, x0 + geo_.tile_w), y1 = std::min(geo_.height, y0 + geo_.tile_h);
+  const ABufferConfig& ab = cfg_.abuffer;
+  walk_levels_.clear();
+  ListWalk w;
+  for (uint32_t y = y0; y < y1; ++y)
+    for (uint32_t x = x0; x < x1; ++x) {
+      const model::ResolveWork rw = px.algo->resolveWork(px.words + (size_t(y) * px.width + x) * px.words_per_pixel);
+      // The algorithm's own budget decides (the CLI builds it from abuffer.*):
+      // truncate walks and sorts max_sorted nodes, spill all of them.
+      const uint32_t walked = rw.sorted;
+      const uint32_t spilled = rw.sorted == rw.nodes ? rw.spilled : 0;
+      if (walk_levels_.size() < walked) walk_levels_.resize(walked, 0);
+      for (uint32_t i = 0; i < walked; ++i) ++walk_levels_[i];
+      const Cycle sort = Cycle(rw.compares) * ab.sort_cycles_per_compare + Cycle(rw.moves) * ab.sort_cycles_per_move +
+                         Cycle(spilled) * ab.spill_cycles_per_node;
+      w.sort_cycles = std::max(w.sort_cycles, sort);
+      res_.list_nodes_walked += walked;
+      res_.sort_cycles += sort;
+    }
+  // Step i reads the i-th node of every pixel whose list is that long, once
+  // step i - 1's reads are back; each read is its own burst at a scattered
+  // address of the pool.
+  const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
+  const uint64_t pool_span = uint64_t(1) << 35;
+  Cycle t = heads_ready;
+  for (size_t i = 0; i < walk_levels_.size(); ++i) {
+    Cycle step = t;
+    for (uint32_t j = 0; j < walk_levels_[i]; ++j) {
+      const uint64_t h = (uint64_t(tile) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(i) << 20 | j) * 0xBF58476D1CE4E5B9ull;
+      const uint64_t addr = s_.map.node_pool + ((h >> 16) % pool_span) / burst * burst;
+      step = std::max(step, access(t, addr, std::min(burst, s_.node_bytes), false, Surface::BlendArrays));
+      res_.node_bytes_read += s_.node_bytes;
+    }
+    res_.list_walk_cycles += step - t;
+    t = step;
+  }
+  w.ready = t;
+  return w;
 }
 
 void RopPartition::resolvePhase() {
@@ -218,16 +267,13 @@ void RopPartition::resolvePhase() {
       if (front_.opaqueLanded()[t] != 0)
         data = std::max(data, access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes,
                                      false, Surface::Colour));
-      if (!s_.bounded) {
-        const uint64_t nodes = front_.tileNodes()[t];
-        if (nodes) {
-          const uint64_t bytes = nodes * kNodeBytes;
-          data = std::max(data, access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
-                                       uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays));
-          res_.node_bytes_read += bytes;
-        }
+      Cycle sort = 0;
+      if (!s_.bounded && front_.tileNodes()[t] != 0) {
+        const ListWalk w = walkLists(t, data);
+        data = w.ready;
+        sort = w.sort_cycles;
       }
-      pf.push({t, data});
+      pf.push({t, data, sort});
       ++next_issue;
       ++acquired;
       moved = true;
@@ -238,12 +284,13 @@ void RopPartition::resolvePhase() {
         window_blocked = true;
       } else {
         const uint32_t t = pf.front().tile;
-        pf.pop();
         uint64_t work = geo_.tilePixels();
-        if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // list traversal
+        if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // composite every node
         computing = true;
         computing_tile = t;
-        compute_done = now + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
+        // The A-buffer's pixels sort side by side: the tile waits for its slowest sort.
+        compute_done = now + pf.front().sort + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
+        pf.pop();
         moved = true;
       }
     }

@@ -155,6 +155,13 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   setup.array_rows = algo.layout().rows;
   setup.format_rate = BlendAlu::formatRate(cfg.alu, algo.layout());
   setup.bounded = algo.bounded();
+  setup.node_bytes = algo.poolNodeBytes();
+  // The A-buffer's global node counter: one atomic unit for every partition.
+  std::unique_ptr<NodeCounter> counter;
+  if (!algo.bounded()) {
+    counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency);
+    setup.counter = counter.get();
+  }
 
   const CoreClock clock(cfg.clock.core_mhz);
   tlm::tlm_global_quantum::instance().set(clock.time(std::max<uint64_t>(1, cfg.sim.quantum_cycles)));
@@ -239,7 +246,8 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     depth.depth_buffer_hits += d.depth_buffer_hits;
     depth.hiz_decided += d.hiz_decided;
     alu.blends += p.alu().stats().blends;
-    alu.rows += p.alu().stats().rows;
+    alu.compares += p.alu().stats().compares;
+    alu.moves += p.alu().stats().moves;
     alu.dropped += p.alu().stats().dropped;
     // lock.mode unordered / none: the outcomes were decided at lock entry.
     if (const BlendArrayRmw* rmw = p.rmw()) {
@@ -285,6 +293,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                     {"blended", rc.stored},
                     {"merged", rc.merged},
                     {"discarded", rc.discarded},
+                    {"dropped_pool_full", algo.bounded() ? 0 : rc.discarded},
                     {"outcomes_sum_to_in", rc.balanced()},
                     {"per_partition", part_frags},
                     {"pass_outcomes", pass_outcomes},
@@ -341,12 +350,14 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     if (front.opaqueLanded()[t]) ++landed_tiles;
   }
   const uint64_t wh = uint64_t(h.width) * h.height;
+  // A-buffer: heads + the pool as allocated (all of it when preallocated);
+  // touched: heads of touched tiles + the nodes stored, each poolNodeBytes().
   const uint64_t nodes = algo.bounded() ? 0 : rc.stored;
-  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + 12 * nodes},
+  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + algo.poolBytes()},
                     {"depth", 4 * wh},
                     {"colour", 4 * wh},
                     {"resolve", 0}};
-  json touched = {{"blend_arrays", uint64_t(touched_tiles) * map.line_bytes + (algo.bounded() ? 0 : 12 * nodes)},
+  json touched = {{"blend_arrays", uint64_t(touched_tiles) * map.line_bytes + (algo.bounded() ? 0 : uint64_t(algo.poolNodeBytes()) * nodes)},
                   {"depth", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"colour", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"resolve", tiles_resolved * map.tile4_bytes}};
@@ -386,7 +397,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"depth_tile_reads", depth.depth_reads},
                  {"depth_buffer_hits", depth.depth_buffer_hits},
                  {"hiz_decided", depth.hiz_decided}};
-  json alu_j = {{"blends", alu.blends}, {"rows", alu.rows}, {"dropped", alu.dropped}};
+  json alu_j = {{"blends", alu.blends}, {"compares", alu.compares}, {"moves", alu.moves}, {"dropped", alu.dropped}};
+  if (counter)
+    alu_j["node_counter"] = {{"atomics", counter->atomics()},
+                             {"wait_cycles", counter->waitCycles()},
+                             {"atomics_per_clock", cfg.abuffer.atomics_per_clock}};
   json per_draw = json::object();
   std::vector<uint32_t> ids;
   for (const auto& [id, _] : front.perDraw()) ids.push_back(id);

@@ -58,16 +58,15 @@ void ApproximateEngine::run() {
   // What a fragment that reaches the lock does follows from its kind,
   // culled x 4 + outcome: its blend latency, whether it writes its line and
   // whether it appends an A-buffer node. Visits are tallied by kind, and
-  // the ALU's counts and the skips' follow from the tallies after the phase.
+  // the skips' counts follow from the tallies after the phase; the blend's
+  // latency adds the work the insert reported (InRec::work).
   constexpr unsigned kKinds = 8;
   static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
-  std::array<Cycle, kKinds> blend_latency{};
   std::array<uint8_t, kKinds> writes{}, appends{};
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
     const unsigned outcome = k & 3;
-    blend_latency[k] = p.alu_.latencyOf(culled ? 0u : p.rows_of_[outcome]);
     writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
     appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
   }
@@ -218,7 +217,10 @@ void ApproximateEngine::run() {
       alu_fx = slot + alu_step;
       const Cycle at = Cycle(slot >> kShift);
       if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
-      const Cycle done = at + blend_latency[kind];
+      const bool culled_kind = kind >= 4;
+      const model::InsertWork work = culled_kind ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
+      p.alu_.count(work, culled_kind);
+      const Cycle done = p.blendStart(at, appends[kind]) + p.alu_.latency(work);
       tl[4].addLeavingGap(acc[4], at, done, kBusy);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
@@ -252,7 +254,6 @@ void ApproximateEngine::run() {
   lock_stats_ = ls;
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
-    p.alu_.countMany(culled ? 0u : p.rows_of_[k & 3], culled, visits[k]);
     if (culled) p.res_.culled_late += visits[k];
   }
   if (p.merge_skip_) p.res_.merges_skipped += visits[unsigned(model::InsertOutcome::Stored)];

@@ -65,7 +65,8 @@ bool CycleEngine::step() {
     const RopPartition::TokenInfo& k = p.tok_[e.token];
     const bool drop = (k.flags & InRec::kCulled) != 0;  // late cull: the blend drops it
     p.res_.culled_late += drop;
-    p.alu_.issue(now, e.token, drop ? 0u : k.rows, drop);
+    const bool appends = !p.s_.bounded && !drop && k.outcome == uint8_t(model::InsertOutcome::Stored);
+    p.alu_.issue(now, e.token, k.work, drop, p.blendStart(now, appends));
     ++to_alu;
   }
 
@@ -82,7 +83,7 @@ bool CycleEngine::step() {
       if (k.flags & InRec::kDeferredInsert) {
         const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, k.tile);
         k.outcome = uint8_t(o);
-        k.rows = p.rows_of_[size_t(o)];
+        k.work = p.charged(p.rmw_->lastWork(), uint8_t(o));
         k.flags &= uint8_t(~InRec::kDeferredInsert);
         p.res_.merges_skipped += unsigned((o == model::InsertOutcome::Stored) & p.merge_skip_);
       }
@@ -151,8 +152,7 @@ bool CycleEngine::step() {
     // The partition's own lock address (FrameGeometry::lockAddress); owner: the primitive run's first record.
     const uint32_t t = p.lock_.allocate(r.lock, r.seq - r.prim_offset);
     const bool culled = (r.flags & InRec::kCulled) != 0;
-    // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
-    const uint8_t rows = culled ? 0 : p.rows_of_[r.outcome & 3];
+    const model::InsertWork work = culled ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
     if constexpr (Deferred) {
       if (r.flags & InRec::kDeferredInsert) {  // its outcome and rows come at lock entry
         Fifo<Fragment>& fq = p.front_.deferred(p.id_);
@@ -162,7 +162,7 @@ bool CycleEngine::step() {
     } else {
       p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
     }
-    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, rows};
+    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, work};
     p.shader_.issue(now, t, r.seq, p.pass_);
     q.pop();
     p.front_.popped(p.id_);

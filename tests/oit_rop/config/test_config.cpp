@@ -77,7 +77,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 23u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 59u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 69u);
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
