@@ -127,6 +127,13 @@ void printTimingSummary(const nlohmann::json& j) {
                c["cache_miss_wait"].get<uint64_t>(), c["dram_bandwidth"].get<uint64_t>(),
                c["alu_busy"].get<uint64_t>(), c["input_starved"].get<uint64_t>());
   }
+  // The A-buffer's own waits (stall causes atomic_wait, list_walk, sort), when it had any.
+  const auto& ss = t["stages"];
+  const uint64_t atomic = ss["blend_alu"]["stalls"].value("atomic_wait", uint64_t(0));
+  const uint64_t walk = ss["resolve"]["stalls"].value("list_walk", uint64_t(0));
+  const uint64_t sort = ss["resolve"]["stalls"].value("sort", uint64_t(0));
+  if (atomic + walk + sort != 0)
+    fmt::print("            blend_alu atomic wait {}, resolve list walk {}, sort {} cycles\n", atomic, walk, sort);
   const auto& m = j["memory"];
   fmt::print("dram        read {} (arrays {}, depth {}, colour {}, resolve {}), written {}, peak {:.1f} GB/s, mean {:.1f} GB/s\n",
              humanBytes(double(num(m, "dram_read_bytes", "total"))),

@@ -238,7 +238,7 @@ void RopPartition::resolvePhase() {
   size_t next_issue = 0;
   bool computing = false;
   uint32_t computing_tile = 0;
-  Cycle compute_done = 0;
+  Cycle compute_done = 0, sort_done = 0;
   for (;;) {
     const Cycle now = now_;
     bool moved = false;
@@ -289,19 +289,20 @@ void RopPartition::resolvePhase() {
         computing = true;
         computing_tile = t;
         // The A-buffer's pixels sort side by side: the tile waits for its slowest sort.
-        compute_done = now + pf.front().sort + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
+        sort_done = now + pf.front().sort;
+        compute_done = sort_done + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
         pf.pop();
         moved = true;
       }
     }
     if (!computing && pf.empty() && next_issue == tiles.size()) break;
-    if (computing) setStatus(Stage::Resolve, StageStatus::busy());
+    if (computing) setStatus(Stage::Resolve, now < sort_done ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
     else if (window_blocked) setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-    else setStatus(Stage::Resolve, StageStatus::stall(Stall::CacheMissWait));
+    else setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
     Cycle next = now + 1;
     if (!moved && cfg_.skip.idle_cycles) {
       next = kNever;
-      if (computing) next = std::min(next, compute_done);
+      if (computing) next = std::min(next, now < sort_done ? sort_done : compute_done);
       if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
       if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
       if (refused) next = std::min(next, retry_at_);

@@ -220,8 +220,10 @@ void ApproximateEngine::run() {
       const bool culled_kind = kind >= 4;
       const model::InsertWork work = culled_kind ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
       p.alu_.count(work, culled_kind);
-      const Cycle done = p.blendStart(at, appends[kind]) + p.alu_.latency(work);
-      tl[4].addLeavingGap(acc[4], at, done, kBusy);
+      const Cycle start = p.blendStart(at, appends[kind]);
+      const Cycle done = start + p.alu_.latency(work);
+      if (start > at) tl[4].addLeavingGap(acc[4], at, start, StageStatus::stall(Stall::AtomicWait));
+      tl[4].addLeavingGap(acc[4], start, done, kBusy);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);

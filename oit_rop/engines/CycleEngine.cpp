@@ -204,7 +204,7 @@ bool CycleEngine::step() {
   else if (alu_blocked) c3 = stall(Stall::AluBusy);
   else c3 = occupied ? stall(Stall::InputStarved) : kIdle;
 
-  if (to_alu || p.alu_.inFlight()) c4 = kBusy;
+  if (to_alu || p.alu_.inFlight()) c4 = !p.s_.bounded && p.alu_.allWaitingAt(now) ? stall(Stall::AtomicWait) : kBusy;
   else c4 = occupied ? stall(Stall::InputStarved) : kIdle;
   // (Resolve stays idle through the transparent phase.)
   const uint64_t codes = uint64_t(c0) | uint64_t(c1) << 8 | uint64_t(c2) << 16 | uint64_t(c3) << 24 | uint64_t(c4) << 32;

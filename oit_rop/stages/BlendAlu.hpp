@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <deque>
 #include <queue>
 #include <utility>
 #include <vector>
@@ -51,6 +52,7 @@ class BlendAlu {
     if (drop) w = {0, 0};
     const Cycle done = std::max(now, start) + latency(w);
     done_.push({done, order_++, token});
+    if (start > now) starts_.push_back(start);  // nondecreasing: NodeCounter grants come in order
     next_done_ = std::min(next_done_, done);
     // Counted by selects: drops are random per fragment.
     stats_.dropped += drop;
@@ -79,6 +81,11 @@ class BlendAlu {
     next_done_ = done_.empty() ? kNever : done_.top().done;
   }
   Cycle nextCompletion() const { return next_done_; }
+  // Every blend in flight still waits for its start (the node counter's atomic).
+  bool allWaitingAt(Cycle now) {
+    while (!starts_.empty() && starts_.front() <= now) starts_.pop_front();
+    return !done_.empty() && starts_.size() == done_.size();
+  }
   size_t inFlight() const { return done_.size(); }
   const AluStats& stats() const { return stats_; }
 
@@ -93,6 +100,7 @@ class BlendAlu {
   RateLimiter rate_;
   std::priority_queue<Done, std::vector<Done>, std::greater<Done>> done_;
   uint64_t order_ = 0;
+  std::deque<Cycle> starts_;  // starts still ahead of the blends that waited
   Cycle next_done_ = kNever;  // earliest completion in flight, kNever when none
   AluStats stats_;
 };

@@ -24,7 +24,8 @@ def _phase_rank(name):
         return (2, 0)
     return (1, int(name.rsplit(" ", 1)[1]) if name[-1].isdigit() else 0)
 CAUSE_SHORT = {"lock_wait": "lock", "scoreboard_full": "scoreboard", "cache_miss_wait": "miss",
-               "dram_bandwidth": "DRAM", "alu_busy": "ALU", "input_starved": "starved"}
+               "dram_bandwidth": "DRAM", "alu_busy": "ALU", "input_starved": "starved",
+               "atomic_wait": "atomics", "list_walk": "list walk", "sort": "sort"}
 
 
 def _order(points, configs):

@@ -340,10 +340,33 @@ TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
   ASSERT_EQ(cfg.dram.burst_bytes, 64u);
   const auto& resolve = r.stats["timing"]["stages"]["resolve"];
   const double bytes_per_cycle = 0.5e9 / (cfg.clock.core_mhz * 1e6);
-  EXPECT_GE(resolve["stalls"]["cache_miss_wait"].get<uint64_t>(), uint64_t(2560 * 64 / bytes_per_cycle));
-  EXPECT_EQ(resolve["busy"].get<uint64_t>(),
-            1560u + uint64_t(2560 / (cfg.alu.blends_per_clock * cfg.alu.fp32_rate)));
+  EXPECT_GE(resolve["stalls"]["list_walk"].get<uint64_t>(), uint64_t(2560 * 64 / bytes_per_cycle));
+  EXPECT_EQ(resolve["stalls"]["sort"].get<uint64_t>(), 1560u);
+  EXPECT_EQ(resolve["busy"].get<uint64_t>(), uint64_t(2560 / (cfg.alu.blends_per_clock * cfg.alu.fp32_rate)));
   expectBalanced(r.stats);
+}
+
+// The list walk is latency-bound: a pixel with n nodes costs n dependent
+// reads. One pixel of one 8x8 tile, n layers, a fast channel (no bandwidth
+// limit to speak of): each step waits one DRAM read's latency L (controller +
+// activate/CAS, roughly the same for every scattered node), so the resolve's
+// list_walk grows by L per node: walk(2n) - walk(n) = n L within a few cycles,
+// and L is at least the controller latency (40 ns = 46 cycles at 1150 MHz).
+TEST(TimingRun, AbufferListWalkCostsOneDependentReadPerNode) {
+  auto walk = [](int n) {
+    std::vector<Fragment> fs;
+    for (int l = 0; l < n; ++l) fs.push_back(model::testutil::frag(0, 0, 0.01f + 0.02f * l, 1, 0, 0, 0.5f));
+    RopConfig cfg = smallConfig();
+    cfg.partitions.count = 1;
+    const auto r = runInChild([&] { return timed("abuffer", {}, fs, 8, 8, cfg); });
+    EXPECT_TRUE(r.ok) << r.error;
+    return r.ok ? r.stats["timing"]["stages"]["resolve"]["stalls"]["list_walk"].get<double>() : 0.0;
+  };
+  const double w8 = walk(8), w16 = walk(16), w32 = walk(32);
+  const double per_node = (w32 - w16) / 16;
+  EXPECT_GE(per_node, 40.0 * 1.150);                      // at least the controller latency per node
+  EXPECT_NEAR(w16 - w8, 8 * per_node, 0.1 * 8 * per_node);  // linear in n: not a stream
+  EXPECT_GT(w8, 8 * 40.0 * 1.150);
 }
 
 // Stage accounts derived by hand. One partition, one transparent fragment per
