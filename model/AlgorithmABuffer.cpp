@@ -115,6 +115,13 @@ class ABuffer final : public OitAlgorithm {
   unsigned writeBytes(unsigned, InsertOutcome o) const override {
     return o == InsertOutcome::Discarded ? 0 : 4 + poolNodeBytes();
   }
+  // The state ranges cover the head only (the node is in the pool).
+  StateRanges readRanges(unsigned, InsertOutcome o) const override {
+    return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::one(0, 4);
+  }
+  StateRanges writeRanges(unsigned, InsertOutcome o) const override {
+    return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::one(0, 4);
+  }
 
  private:
   struct Node {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "oit_rop/RopPartition.hpp"
+#include "oit_rop/memory/PortCalendar.hpp"
 
 namespace oit::rop {
 
@@ -41,33 +42,45 @@ void ApproximateEngine::run() {
   }
   constexpr StageStatus kBusy = StageStatus::busy();
   const bool grouped = p.cfg_.lock.per_primitive && p.cfg_.lock.granularity != LockGranularity::Pixel;
-  ReleaseTable locks(p.owned_.size() * p.geo_.lock_per_tile, grouped);
+  // Lock addresses are local tile x addresses per tile + offset, and local
+  // tile numbers run to the largest of the partition's own (not its count:
+  // with tiles_x not a multiple of the partitions, a row holds fewer than
+  // ceil(tiles_x / N) of them). Sized by the count, 3 or 6 partitions wrote
+  // past the table's end.
+  uint32_t local_tiles = 0;
+  for (uint32_t t : p.owned_) local_tiles = std::max(local_tiles, p.geo_.localOf(t) + 1);
+  ReleaseTable locks(size_t(local_tiles) * p.geo_.lock_per_tile, grouped);
   const unsigned cap = p.cfg_.lock.capacity;
   scoreboard_.reset(p.now_);
   waiting_.reset(p.now_);
   // Issue and blend slots in 1/kOne cycles (rates need not be integers).
   const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / p.cfg_.input.fragments_per_clock));
   const double alu_rate = std::max(1e-6, double(p.cfg_.alu.blends_per_clock) * p.s_.format_rate);
-  const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
-  int64_t issue_fx = int64_t(p.now_) << kShift, alu_fx = 0;
+  // Blend slots by time: each fragment takes the earliest slot at or after
+  // the cycle its line is there (the cycle engine's ALU serves fragments in
+  // the order they enter the cache stage, i.e. the order their locks admit
+  // them). Handed out in visit (issue) order, a fragment that waited long for
+  // its lock pushed every younger one's blend behind its own: dgpu, particles
+  // 640x360, mlab k = 2 came out +41.8 % (DESIGN.md).
+  PortCalendar alu_slots(alu_rate, 0);
+  int64_t issue_fx = int64_t(p.now_) << kShift;
   const Cycle tail = p.cfg_.lock.release == LockRelease::EndOfShader ? p.cfg_.lock.shader_tail : 0;
   const Cycle depth_latency = p.cfg_.early_depth.latency, hit_latency = p.cfg_.cache.hit_latency;
   // A culled fragment leaves at early depth when early culling is on: its
   // flag masked by this (one test per visit instead of two).
   const uint8_t leaves_early = p.early_cull_ ? InRec::kCulled : 0;
   // What a fragment that reaches the lock does follows from its kind,
-  // culled x 4 + outcome: its blend latency, whether it writes its line and
-  // whether it appends an A-buffer node. Visits are tallied by kind, and
+  // culled x 4 + outcome: its blend latency, the lines it touches
+  // (FragmentLines) and whether it appends an A-buffer node. Visits are tallied by kind, and
   // the skips' counts follow from the tallies after the phase; the blend's
   // latency adds the work the insert reported (InRec::work).
   constexpr unsigned kKinds = 8;
   static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
-  std::array<uint8_t, kKinds> writes{}, appends{};
+  std::array<uint8_t, kKinds> appends{};
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
     const unsigned outcome = k & 3;
-    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
     appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
   }
   ShaderInput::Draw latency = p.shader_.draw(p.pass_);
@@ -104,7 +117,7 @@ void ApproximateEngine::run() {
     __builtin_prefetch(&in.at(2 * kLookahead));
     const InRec& ahead = in.at(kLookahead);
     locks.prefetch(ahead.lock);
-    p.cache_.prefetch(ahead.tile);
+    p.cache_.prefetch(p.tileOf(ahead.pixel));
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();
@@ -149,6 +162,7 @@ void ApproximateEngine::run() {
     }
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
+    alu_slots.retireBefore(issue);  // no blend of this or a later fragment starts before its issue
 
     const Cycle finish = issue + latency(r.seq);
     last_finish = std::max(last_finish, finish);
@@ -161,7 +175,7 @@ void ApproximateEngine::run() {
     Cycle early = passed;
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
-      early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+      early = std::max(early, p.early_.depthTileReady(issue, p.tileOf(r.pixel)) + (finish - issue));
     }
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
@@ -182,7 +196,9 @@ void ApproximateEngine::run() {
       }
       const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
       ++visits[kind];
-      const bool write = writes[kind];
+      // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
+      const uint32_t tile = p.tileOf(r.pixel);
+      const std::span<const LineTouch> lines = p.linesOf(r.pixel, uint8_t(kind));
       const Cycle lock_enter = enter;
       // Into the cache the next cycle when admitted on arrival, in the release's
       // own cycle when admitted at one (the cycle engine's stage order).
@@ -193,29 +209,28 @@ void ApproximateEngine::run() {
       // its lock wait, which already covered the older fragment that missed.
       Cycle at_cache = issue;
       bool missed;
-      Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
-      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
+      Cycle got = p.cache_.touch(at_cache, tile, lines, missed);
+      while (got == kNever) [[unlikely]] {  // the miss queue lacks entries: retry when enough free
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
-        got = p.cache_.touch(at_cache, r.tile, write, missed);
+        got = p.cache_.touch(at_cache, tile, lines, missed);
       }
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
-        fill_ready[r.tile] = ready;
+        fill_ready[tile] = ready;
       } else if (got > at_cache + hit_latency) {
-        ready = std::max(ready, fill_ready[r.tile]);
+        ready = std::max(ready, fill_ready[tile]);
       }
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
       tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
       const bool miss = ready > enter + hit_latency;
       tl[3].addLeavingGap(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
-      const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
-      alu_fx = slot + alu_step;
-      const Cycle at = Cycle(slot >> kShift);
+      Cycle at, slot_end;
+      alu_slots.book(ready, 1, at, slot_end);
       if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
       const bool culled_kind = kind >= 4;
       const model::InsertWork work = culled_kind ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
