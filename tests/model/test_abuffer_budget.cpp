@@ -2,6 +2,7 @@
 // work each algorithm's insert reports (InsertWork), with hand-derived values.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -123,6 +124,26 @@ TEST(ABufferBudget, ResolveWorkCountsTheWalkAndTheInsertionSort) {
   }
 }
 
+// One pixel of `name` with k rows, and the work of each insert into it.
+struct OnePixel {
+  std::unique_ptr<OitAlgorithm> algo;
+  std::vector<uint32_t> words;
+  OnePixel(const char* name, unsigned k) : algo(makeAlgorithm(name, testutil::layers(k))), words(algo->stateWords()) {
+    algo->beginFrame(testutil::header(1, 1));
+    algo->clear(words.data());
+  }
+  InsertWork insert(float z, float a = 0.5f, unsigned pass = 0, InsertOutcome* outcome = nullptr) {
+    InsertContext ctx;
+    const InsertOutcome o = algo->insertFn()(*algo, words.data(), frag(0, 0, z, 1, 0, 0, a), pass, ctx);
+    if (outcome) *outcome = o;
+    return ctx.work;
+  }
+};
+void expectWork(InsertWork got, InsertWork want, const std::string& what) {
+  EXPECT_EQ(got.compares, want.compares) << what;
+  EXPECT_EQ(got.moves, want.moves) << what;
+}
+
 // The work an insert reports, mlab k = 4 (fp32), one pixel:
 //  1st at .5 into the empty array: slot 0 (1 compare), writes its row: {1, 1}
 //  2nd at .3: slot 0 (1 compare), shifts .5, writes its row: {1, 2}
@@ -131,73 +152,49 @@ TEST(ABufferBudget, ResolveWorkCountsTheWalkAndTheInsertionSort) {
 //  5th at .1: full array, slot 0: rows 0..3 rewritten (merge of the last two): {1, 4}
 //  6th at .9: behind every row: 4 compares, merged into the last row: {4, 1}
 TEST(InsertWork, MlabCountsTheSlotSearchAndTheRowsWritten) {
-  auto a = makeAlgorithm("mlab", testutil::layers(4));
-  std::vector<uint32_t> w(a->stateWords());
-  a->clear(w.data());
+  OnePixel px("mlab", 4);
   const float z[6] = {0.5f, 0.3f, 0.4f, 0.6f, 0.1f, 0.9f};
   const InsertWork want[6] = {{1, 1}, {1, 2}, {2, 2}, {4, 1}, {1, 4}, {4, 1}};
-  for (unsigned i = 0; i < 6; ++i) {
-    InsertContext ctx;
-    a->insertFn()(*a, w.data(), frag(0, 0, z[i], 1, 0, 0, 0.5f), 0, ctx);
-    EXPECT_EQ(ctx.work.compares, want[i].compares) << "insert " << i;
-    EXPECT_EQ(ctx.work.moves, want[i].moves) << "insert " << i;
-  }
+  for (unsigned i = 0; i < 6; ++i) expectWork(px.insert(z[i]), want[i], "insert " + std::to_string(i));
 }
 
 // kbuffer k = 2: a rejection reads and compares the last row only and writes nothing.
 TEST(InsertWork, KBufferRejectionComparesOneRow) {
-  auto a = makeAlgorithm("kbuffer", testutil::layers(2));
-  std::vector<uint32_t> w(a->stateWords());
-  a->clear(w.data());
-  InsertContext ctx;
-  a->insert(w.data(), frag(0, 0, 0.2f, 1, 0, 0, 0.5f), 0, ctx);
-  a->insert(w.data(), frag(0, 0, 0.3f, 1, 0, 0, 0.5f), 0, ctx);
-  EXPECT_EQ(ctx.work.compares, 2u);  // slot 1
-  EXPECT_EQ(ctx.work.moves, 1u);
-  EXPECT_EQ(a->insert(w.data(), frag(0, 0, 0.9f, 1, 0, 0, 0.5f), 0, ctx), InsertOutcome::Discarded);
-  EXPECT_EQ(ctx.work.compares, 1u);
-  EXPECT_EQ(ctx.work.moves, 0u);
+  OnePixel px("kbuffer", 2);
+  px.insert(0.2f);
+  expectWork(px.insert(0.3f), {2, 1}, "slot 1");
+  InsertOutcome o;
+  expectWork(px.insert(0.9f, 0.5f, 0, &o), {1, 0}, "rejected");
+  EXPECT_EQ(o, InsertOutcome::Discarded);
 }
 
 // adaptive k = 2, pass 0: the third node forces a compression.
-//  .5: {1, 1}; .3: slot 0 (1 compare), new node + .5 rescaled: {1, 2};
+//  .5: no node to compare with (min(p + 1, n) = 0), its node: {0, 1};
+//  .3: slot 0 (1 compare), new node + .5 rescaled: {1, 2};
 //  .4: slot 1 (2 compares), new + .5 = 2 writes; 3 nodes > k: the removal
 //  metric for j = 1, 2 (2 compares) and the rewrite from the removed node:
 //  node 2 removed (the smallest area) -> n - best = 1 write. Total {4, 3}.
-// Pass 1 (composite): nodes compared until the first behind, one accumulator.
+// Pass 1 (composite): the nodes compared until the first one behind (1 or
+// 2 here, by the nodes the compression kept), one accumulator.
 TEST(InsertWork, AdaptiveCountsInsertAndCompress) {
-  auto a = makeAlgorithm("adaptive", testutil::layers(2));
-  std::vector<uint32_t> w(a->stateWords());
-  a->clear(w.data());
-  InsertContext ctx;
-  a->insert(w.data(), frag(0, 0, 0.5f, 1, 0, 0, 0.5f), 0, ctx);
-  EXPECT_EQ(ctx.work.compares, 0u + 0u);  // no node to compare with: min(p + 1, n) = 0
-  EXPECT_EQ(ctx.work.moves, 1u);
-  a->insert(w.data(), frag(0, 0, 0.3f, 1, 0, 0, 0.5f), 0, ctx);
-  EXPECT_EQ(ctx.work.compares, 1u);
-  EXPECT_EQ(ctx.work.moves, 2u);
-  EXPECT_EQ(a->insert(w.data(), frag(0, 0, 0.4f, 1, 0, 0, 0.5f), 0, ctx), InsertOutcome::Merged);
-  EXPECT_EQ(ctx.work.compares, 2u + 2u);
-  EXPECT_EQ(ctx.work.moves, 2u + 1u);
-  a->insert(w.data(), frag(0, 0, 0.45f, 1, 0, 0, 0.5f), 1, ctx);
-  EXPECT_EQ(ctx.work.moves, 1u);
-  EXPECT_GE(ctx.work.compares, 1u);
-  EXPECT_LE(ctx.work.compares, 2u);
+  OnePixel px("adaptive", 2);
+  expectWork(px.insert(0.5f), {0, 1}, ".5");
+  expectWork(px.insert(0.3f), {1, 2}, ".3");
+  InsertOutcome o;
+  expectWork(px.insert(0.4f, 0.5f, 0, &o), {2 + 2, 2 + 1}, ".4");
+  EXPECT_EQ(o, InsertOutcome::Merged);
+  const InsertWork shade = px.insert(0.45f, 0.5f, 1);
+  EXPECT_EQ(shade.moves, 1u);
+  EXPECT_GE(shade.compares, 1u);
+  EXPECT_LE(shade.compares, 2u);
 }
 
 // Accumulating algorithms write one accumulator and compare nothing; a = 0 does nothing.
 TEST(InsertWork, AccumulatorsWriteOneRow) {
   for (const char* name : {"alpha", "wsum", "wavg", "wboit"}) {
-    auto a = makeAlgorithm(name, testutil::layers(1));
-    a->beginFrame(testutil::header(1, 1));
-    std::vector<uint32_t> w(a->stateWords());
-    a->clear(w.data());
-    InsertContext ctx;
-    a->insert(w.data(), frag(0, 0, 0.5f, 1, 0, 0, 0.5f), 0, ctx);
-    EXPECT_EQ(ctx.work.compares, 0u) << name;
-    EXPECT_EQ(ctx.work.moves, 1u) << name;
-    a->insert(w.data(), frag(0, 0, 0.5f, 1, 0, 0, 0.0f), 0, ctx);
-    EXPECT_EQ(ctx.work.moves, 0u) << name;
+    OnePixel px(name, 1);
+    expectWork(px.insert(0.5f), {0, 1}, name);
+    expectWork(px.insert(0.5f, 0.0f), {0, 0}, std::string(name) + " a = 0");
   }
 }
 
