@@ -79,9 +79,11 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   payload_.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
   const sc_core::sc_time at = clock_.time(now), stamp = sc_core::sc_time_stamp();
   sc_core::sc_time delay = at > stamp ? at - stamp : sc_core::SC_ZERO_TIME;
+  memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
   if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe());
   return ext->done;
 }
 
@@ -131,6 +133,7 @@ void RopPartition::opaquePhase() {
   // where an opaque fragment landed are written once, spread over the phase.
   const Cycle start = now_;
   const Cycle cycles = Cycle(std::ceil(double(n) / cfg_.input.fragments_per_clock));
+  root_.set(now_, RootCause::Input);  // the pre-pass at the input rate
   std::vector<uint32_t> landed;
   for (uint32_t t : owned_)
     if (front_.opaqueLanded()[t] != 0) landed.push_back(t);
@@ -215,19 +218,26 @@ void RopPartition::resolvePhase() {
       // lists (every node of the tile read once).
       const uint32_t t = tiles[next_issue];
       Cycle data = r;
+      // The wait's root causes follow the input that arrives last.
+      WaitSplit wait = r > now + cfg_.cache.hit_latency ? last_miss_ : WaitSplit{now, now, now, RootCause::RopCacheMiss};
+      auto input = [&](Cycle ready) {
+        if (ready > data) {
+          data = ready;
+          wait = splitWait(now, ready, memory_.probe());
+        }
+      };
       if (front_.opaqueLanded()[t] != 0)
-        data = std::max(data, access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes,
-                                     false, Surface::Colour));
+        input(access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour));
       if (!s_.bounded) {
         const uint64_t nodes = front_.tileNodes()[t];
         if (nodes) {
           const uint64_t bytes = nodes * kNodeBytes;
-          data = std::max(data, access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
-                                       uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays));
+          input(access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
+                       uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays));
           res_.node_bytes_read += bytes;
         }
       }
-      pf.push({t, data});
+      pf.push({t, data, wait});
       ++next_issue;
       ++acquired;
       moved = true;
@@ -248,9 +258,18 @@ void RopPartition::resolvePhase() {
       }
     }
     if (!computing && pf.empty() && next_issue == tiles.size()) break;
-    if (computing) setStatus(Stage::Resolve, StageStatus::busy());
-    else if (window_blocked) setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-    else setStatus(Stage::Resolve, StageStatus::stall(Stall::CacheMissWait));
+    // Root causes: the resolve's compute runs at the blend rate; a tile's
+    // inputs wait for memory; a refused acquire for the latest miss.
+    if (computing) {
+      setStatus(Stage::Resolve, StageStatus::busy());
+      root_.set(now, RootCause::Alu);
+    } else if (window_blocked) {
+      setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+      root_.set(now, RootCause::DramBandwidth);
+    } else {
+      setStatus(Stage::Resolve, StageStatus::stall(Stall::CacheMissWait));
+      root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
+    }
     Cycle next = now + 1;
     if (!moved && cfg_.skip.idle_cycles) {
       next = kNever;
@@ -266,6 +285,7 @@ void RopPartition::resolvePhase() {
   // The frame ends when the last posted write reached DRAM: the DRAM
   // controller writes what its write queues still hold (MEMORY.md).
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+  root_.set(now_, RootCause::DramBandwidth);  // the posted writes still queued
   const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
@@ -285,6 +305,8 @@ void RopPartition::run() {
     cycle_->run();
   resolvePhase();
   flushAccounts();
+  root_.account(now_);
+  res_.root_causes = root_.cycles();
   res_.end = now_;
   // Bring SystemC time up to the partition's end (it may run up to a quantum
   // ahead): the sampler samples while any partition runs, so without this the

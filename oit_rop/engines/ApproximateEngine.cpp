@@ -31,6 +31,22 @@ void ApproximateEngine::run() {
   constexpr size_t kStages = 5;     // every stage but the resolve
   p.flushAccounts();  // every stage idle up to here; the timelines account the phase
   const Cycle start = p.now_;
+  // Root causes (DESIGN.md "Root causes", approximate engine): the partition's
+  // time moves from issue to issue. A span the input's rate decides is the
+  // input's (the ALU's when its blends are booked beyond it); a span a full
+  // scoreboard or a pass's drain decides is shared out in proportion to the
+  // delays the fragments met since the last such span (DelayShares).
+  p.root_.account(p.now_);
+  DelayShares shares;
+  Cycle charged = p.now_;  // root causes accounted up to here
+  Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
+  // The latest blend that got its slot when it was ready (no queueing): when
+  // it was ready and what delayed it most (a younger blend ready before it
+  // waits behind it in visit order: that wait is this delay's, not the ALU's).
+  Cycle alu_start = 0;
+  RootCause start_cause = RootCause::Alu;
+  bool start_missed = false;
+  Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
   std::array<StageCycles, kStages> acc;
@@ -91,6 +107,8 @@ void ApproximateEngine::run() {
         if (!p.starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", p.id_));
         retireCalendars(p.now_);
         p.waitForFrontEnd();
+        if (p.now_ > charged) p.root_.add(RootCause::InputStarvation, p.now_ - charged);
+        charged = std::max(charged, p.now_);
         in = q.cursor();
         issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
         gap0 = StageStatus::stall(Stall::InputStarved);
@@ -112,6 +130,8 @@ void ApproximateEngine::run() {
       q.setHead(in);
       retireCalendars(p.now_);
       if (last_release > p.now_) p.advance(last_release, false);
+      if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+      charged = std::max(charged, p.now_);
       in = q.cursor();
       issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
       scoreboard_.reset(p.now_);
@@ -128,16 +148,32 @@ void ApproximateEngine::run() {
     // free nothing later than fx) are dropped a cycle at a time until the
     // scoreboard is not full or its earliest release is still in flight.
     int64_t fx = issue_fx;
+    const Cycle by_rate = Cycle(issue_fx >> kShift);
+    bool sb_delayed = false;  // a full scoreboard decided the issue
     while (scoreboard_.size() >= cap) {
       if (scoreboard_.dropDue(p.now_)) continue;
       const int64_t freed = int64_t(scoreboard_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;
+        sb_delayed = true;
         gap0 = StageStatus::stall(Stall::ScoreboardFull);
       }
     }
     const Cycle issue = Cycle(fx >> kShift);
     issue_fx = fx + in_step;
+    if (issue > charged) {
+      // Up to the input's slot: the input's (the ALU's where blends queue for
+      // it then: the sink at its rate); then the scoreboard's. When a full
+      // scoreboard decided the issue, all of it is the scoreboard's: a faster
+      // input could not have issued sooner (the cycle engine's rule too).
+      const Cycle rate_end = sb_delayed ? charged : std::clamp(by_rate, charged, issue);
+      const Cycle alu = std::min(rate_end, alu_run_to) > std::max(charged, alu_run_from)
+                            ? std::min(rate_end, alu_run_to) - std::max(charged, alu_run_from) : 0;
+      p.root_.add(RootCause::Alu, alu);
+      p.root_.add(RootCause::Input, rate_end - charged - alu);
+      shares.chargeTo(p.root_, issue - rate_end, RootCause::ScoreboardFull);
+      charged = issue;
+    }
     if (issue > p.now_) {
       if (issue >= p.next_sync_) {  // p.advance() yields: the sampler reads the calendars, the front end the queue
         retireCalendars(p.now_);
@@ -163,7 +199,11 @@ void ApproximateEngine::run() {
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
       early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+      if (early > passed) shares.addLike(early - passed, issue, issue + (early - finish), p.last_depth_);
     }
+    Cycle main_delay = early - passed;  // the fragment's largest delay and its cause (head-of-line below)
+    RootCause main_cause = RootCause::DramBandwidth;
+    bool main_missed = false;
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
@@ -178,6 +218,11 @@ void ApproximateEngine::run() {
         ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
         enter = free;
         waiting_.push(enter);
+        shares.add(RootCause::LockWait, free - early);
+        if (free - early > main_delay) {
+          main_delay = free - early;
+          main_cause = RootCause::LockWait;
+        }
         // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
         tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
@@ -194,21 +239,32 @@ void ApproximateEngine::run() {
       // its lock wait, which already covered the older fragment that missed.
       Cycle at_cache = issue;
       bool missed;
+      p.memory_.resetProbe();
       Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
       while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
+        p.memory_.resetProbe();
         got = p.cache_.touch(at_cache, r.tile, write, missed);
       }
+      // Waiting for a miss-queue entry: the misses in flight, as the latest one.
+      if (at_cache > issue) shares.addLike(at_cache - issue, miss_from, miss_to, p.last_miss_);
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
         fill_ready[r.tile] = ready;
+        p.last_miss_ = splitWait(at_cache, got, p.memory_.probe());
+        miss_from = at_cache;
+        miss_to = got;
+        shares.addWait(at_cache, got, p.last_miss_);
       } else if (got > at_cache + hit_latency) {
+        const Cycle before = ready;
         ready = std::max(ready, fill_ready[r.tile]);
+        shares.addLike(ready - before, miss_from, miss_to, p.last_miss_);
       }
+      if (ready - (enter + hit_latency) > main_delay) main_missed = true;
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
       tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
@@ -217,6 +273,24 @@ void ApproximateEngine::run() {
       const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
       alu_fx = slot + alu_step;
       const Cycle at = Cycle(slot >> kShift);
+      if (at > ready) {
+        // Slots go in visit order: the part of the wait before the run's first
+        // blend was ready is head-of-line blocking behind it (its delay's
+        // cause, as the cycle engine's in-order cache queue charges the head's
+        // miss); the rest is the ALU's rate.
+        const Cycle hol = alu_start > ready ? std::min(at, alu_start) - ready : 0;
+        if (start_missed) shares.addLike(hol, miss_from, miss_to, p.last_miss_);
+        else if (start_cause == RootCause::DramBandwidth) shares.addLike(hol, issue, issue, p.last_depth_);
+        else shares.add(start_cause, hol);
+        shares.add(RootCause::Alu, at - ready - hol);
+        // Blends queue for the ALU's rate over [alu_run_from, alu_run_to): extend the run or start one.
+        if (std::max(ready, alu_start) > alu_run_to) alu_run_from = std::max(ready, alu_start);
+        alu_run_to = at;
+      } else {
+        alu_start = ready;
+        start_missed = main_missed;
+        start_cause = main_delay ? main_cause : RootCause::Alu;
+      }
       if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
       const Cycle done = at + blend_latency[kind];
       tl[4].addLeavingGap(acc[4], at, done, kBusy);
@@ -237,6 +311,8 @@ void ApproximateEngine::run() {
     }
     ++fragments;
   }
+  if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+  p.root_.skipTo(p.now_);
   // Shader busy until the last fragment left it; then every stage idle to the drain.
   tl[0].close(acc[0], last_finish, kBusy);
   for (size_t i = 0; i < kStages; ++i) {
