@@ -42,7 +42,7 @@ using model::RenderResult;
 
 struct RunArgs {
   std::string trace, out, algo = "mlab", mode = "timing", format = "fp32";
-  std::string preset, config_file, vcd;  // preset empty: the --config file's "preset", else igpu
+  std::string preset, config_file, vcd;  // preset empty: the --config file's "preset", else iris-pro-5200
   std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
   bool width_given = false, height_given = false;
@@ -163,6 +163,16 @@ void printTimingSummary(const nlohmann::json& j) {
              humanBytes(double(num(m, "dram_read_bytes", "resolve"))),
              humanBytes(double(num(m, "dram_write_bytes", "total"))), m["peak_gbps"].get<double>(),
              m["mean_gbps"].get<double>());
+  // Beside the DRAM line: the traffic against what a perfect cache would move
+  // (what the frame left dirty in the caches counts: it leaves later).
+  std::string rates;
+  for (const auto& l : m["levels"])
+    rates += fmt::format("{}{} {:.1f}%", rates.empty() ? "" : ", ", l["name"].get<std::string>(),
+                         100.0 * l["hit_rate"].get<double>());
+  fmt::print("compulsory  {}; moved {:.2f}x that (DRAM {} + left dirty in the caches {}); hit rate {}\n",
+             humanBytes(double(num(m, "compulsory_bytes", "total"))), m["traffic_over_compulsory"].get<double>(),
+             humanBytes(double(num(m, "dram_read_bytes", "total") + num(m, "dram_write_bytes", "total"))),
+             humanBytes(double(num(m, "end_dirty_bytes", "total"))), rates);
   const auto& fa = m["footprint"]["allocated"];
   const auto& ft = m["footprint"]["touched"];
   auto total = [](const nlohmann::json& o) {
@@ -435,8 +445,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--mode", a->mode, "timing (SystemC ROP: cycles, stalls, DRAM) or functional (image only, faster)")
       ->capture_default_str();
   cmd->add_option("--preset", a->preset,
-                  "ROP preset: igpu or dgpu (default igpu, or the --config file's \"preset\"; used in timing mode, "
-                  "validated in both)");
+                  "ROP preset: iris-pro-5200, titan-x-maxwell or navi21 (aliases igpu, dgpu; default "
+                  "iris-pro-5200, or the --config file's \"preset\"; used in timing mode, validated in both)");
   cmd->add_option("--config", a->config_file,
                   "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
   cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")

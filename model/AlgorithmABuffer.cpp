@@ -48,9 +48,12 @@ class ABuffer final : public OitAlgorithm {
     return finiteRgb(float(r + T * bg.r), float(g + T * bg.g), float(b + T * bg.b));
   }
 
-  // Insert: read + write the head (an atomic exchange), write one node.
+  // Insert: read + write the head (an atomic exchange), write one node (in
+  // the pool, not in the per-pixel state: the ranges cover the head only).
   unsigned readBytes(unsigned, InsertOutcome) const override { return 4; }
   unsigned writeBytes(unsigned, InsertOutcome) const override { return 4 + sizeof(Node); }
+  StateRanges readRanges(unsigned, InsertOutcome) const override { return StateRanges::one(0, 4); }
+  StateRanges writeRanges(unsigned, InsertOutcome) const override { return StateRanges::one(0, 4); }
 
  private:
   struct Node {

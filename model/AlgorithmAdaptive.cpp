@@ -54,12 +54,17 @@ class Adaptive final : public OitAlgorithm {
 
   // Pass 0 reads and writes the nodes and its counter; pass 1 reads the nodes,
   // the accumulator and its counter, and writes the accumulator and counter.
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (3 * k_ + 1) : 4 * (3 * k_ + 4);
+  // Words: nodes [0, 3k), accumulator [3k, 3k + 3), counters 3k + 3 (pass 0), 3k + 4 (pass 1).
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t nodes = 12 * k_;
+    return pass == 0 ? StateRanges::two(0, nodes, nodes + 12, nodes + 16)
+                     : StateRanges::two(0, nodes + 12, nodes + 16, nodes + 20);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (o == InsertOutcome::Discarded) return 0;
-    return pass == 0 ? 4 * (3 * k_ + 1) : 4 * 4;
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    if (o == InsertOutcome::Discarded) return StateRanges::none();
+    const uint32_t nodes = 12 * k_;
+    return pass == 0 ? StateRanges::two(0, nodes, nodes + 12, nodes + 16)
+                     : StateRanges::two(nodes, nodes + 12, nodes + 16, nodes + 20);
   }
 
  private:

@@ -72,12 +72,18 @@ class Slab final : public OitAlgorithm {
     return finiteRgb(r + T * bg.r, g + T * bg.g, b + T * bg.b);
   }
 
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (3 * k_ + 2) : 4 * (3 * k_ + 5);
+  // Words: layers [0, 3k), then from acc_: U r, g, b, U1, T, counter pass 0, counter pass 1.
+  // Pass 0 reads and writes the layers, T and its counter (a Discarded
+  // fragment still writes T and the counter); pass 1 reads the layers, U, U1
+  // and its counter and writes U, U1 and the counter.
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t a = 4 * acc_;
+    return pass == 0 ? StateRanges::two(0, a, a + 16, a + 24) : StateRanges::two(0, a + 16, a + 24, a + 28);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (pass == 1) return o == InsertOutcome::Discarded ? 0 : 4 * 5;
-    return o == InsertOutcome::Discarded ? 4 * 2 : 4 * (3 * k_ + 2);  // T and counter always
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    const uint32_t a = 4 * acc_;
+    if (pass == 1) return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::two(a, a + 16, a + 24, a + 28);
+    return o == InsertOutcome::Discarded ? StateRanges::one(a + 16, a + 24) : StateRanges::two(0, a, a + 16, a + 24);
   }
 
   // P_b at real-valued (s, t), bilinear in the table (exact at integers).

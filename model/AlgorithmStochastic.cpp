@@ -66,12 +66,17 @@ class Stochastic final : public OitAlgorithm {
     }
     return finiteRgb(r + T * bg.r, g + T * bg.g, b + T * bg.b);
   }
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (s_ + 1) : 4 * (s_ + 4);
+  // Words: sample depths [0, S), T at S, U r, g, b, U1 at S + 1 .. S + 4.
+  // Pass 0 reads and writes the depths and T (a Discarded fragment still
+  // writes T: a > 0); pass 1 reads the depths, U and U1 and writes U and U1.
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t d = 4 * s_;
+    return pass == 0 ? StateRanges::one(0, d + 4) : StateRanges::two(0, d, d + 4, d + 20);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (pass == 1) return o == InsertOutcome::Discarded ? 0 : 16;
-    return o == InsertOutcome::Discarded ? 4 : 4 * (s_ + 1);  // T is always written (a > 0)
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    const uint32_t d = 4 * s_;
+    if (pass == 1) return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::one(d + 4, d + 20);
+    return o == InsertOutcome::Discarded ? StateRanges::one(d, d + 4) : StateRanges::one(0, d + 4);
   }
 
  private:

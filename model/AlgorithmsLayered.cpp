@@ -122,6 +122,24 @@ class SortedRows : public OitAlgorithm {
     compositeAt<F>(w, r, g, b, T);
     return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
   }
+  // Bytes the resolve of the rows reads: rows front to back up to the first
+  // empty row or the row that makes the transmittance exactly 0 (both
+  // included); the rows behind add exactly nothing, so stopping there gives
+  // the image compositeAt gives.
+  template <StorageFormat F>
+  unsigned resolvedRowBytes(const uint32_t* w) const {
+    constexpr unsigned kRw = rowWords(F);
+    float T = 1.0f;
+    for (unsigned i = 0; i < n_; ++i) {
+      const LayerRow row = loadRow(F, w + i * kRw);
+      T *= row.t;
+      if (row.z == kInf || T == 0.0f) return (i + 1) * 4 * kRw;
+    }
+    return n_ * 4 * kRw;
+  }
+  unsigned resolvedRowBytes(const uint32_t* w) const {
+    return withFormat([&](auto fmt) { return resolvedRowBytes<decltype(fmt)::value>(w); });
+  }
   using ResolveFn = Rgb (SortedRows::*)(const uint32_t*, Rgb) const;
   ResolveFn resolveRowsFn() const {
     return withFormat([](auto fmt) -> ResolveFn { return &SortedRows::resolveRowsAt<decltype(fmt)::value>; });
@@ -151,6 +169,7 @@ class Mlab final : public SortedRows {
   std::string_view name() const override { return "mlab"; }
   void clear(uint32_t* w) override { clearRows(w); }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
+  unsigned resolveBytes(const uint32_t* w) const override { return resolvedRowBytes(w); }
 
  private:
   friend class SortedRows;  // pickInsert
@@ -201,6 +220,15 @@ class KBuffer final : public SortedRows {
   std::string_view name() const override { return "kbuffer"; }
   void clear(uint32_t* w) override { clearRows(w); }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
+  unsigned resolveBytes(const uint32_t* w) const override { return resolvedRowBytes(w); }
+  // The rows are sorted, so the last row alone decides a rejection: a
+  // fragment not in front of it (!(z <= its depth)) lands behind every row.
+  // The insert reads that row first, so a Discarded insert (rejected, or
+  // a = 0) reads one row and writes none; the others read every row.
+  StateRanges readRanges(unsigned, InsertOutcome o) const override {
+    const uint32_t all = n_ * 4 * rw_;
+    return o == InsertOutcome::Discarded ? StateRanges::one(all - 4 * rw_, all) : StateRanges::one(0, all);
+  }
 
  private:
   friend class SortedRows;  // pickInsert

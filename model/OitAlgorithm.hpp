@@ -46,6 +46,40 @@ struct StateLayout {
   unsigned words() const { return rows * rowWords(format) + extra_words; }
 };
 
+// Byte ranges of a pixel's state, in the state's own order (row i of the
+// layout at i x rowBytes(format), the extra words after the rows): at most
+// two, increasing and disjoint. What one insert reads or writes
+// (OitAlgorithm::readRanges / writeRanges); the timing model turns them into
+// the cache lines and sectors the insert touches.
+struct StateRanges {
+  struct Range {
+    uint32_t begin = 0, end = 0;  // [begin, end), bytes
+  };
+  static constexpr unsigned kMax = 2;
+  Range range[kMax]{};
+  unsigned count = 0;
+
+  static StateRanges none() { return {}; }
+  static StateRanges one(uint32_t begin, uint32_t end) {
+    StateRanges r;
+    r.add(begin, end);
+    return r;
+  }
+  static StateRanges two(uint32_t b0, uint32_t e0, uint32_t b1, uint32_t e1) {
+    StateRanges r;
+    r.add(b0, e0);
+    r.add(b1, e1);
+    return r;
+  }
+  // Appends [begin, end) (an empty range is dropped); ranges must come in increasing order.
+  void add(uint32_t begin, uint32_t end);
+  unsigned bytes() const {
+    unsigned n = 0;
+    for (unsigned i = 0; i < count; ++i) n += range[i].end - range[i].begin;
+    return n;
+  }
+};
+
 // Per-fragment information the ROP has besides the fragment itself.
 struct InsertContext {
   // Final opaque depth at the pixel, +inf where no opaque fragment landed.
@@ -112,8 +146,21 @@ class OitAlgorithm {
   virtual Rgb resolve(const uint32_t* words, Rgb background) = 0;
 
   // Bytes of per-pixel memory one insert reads / writes (the ROP's RMW).
-  virtual unsigned readBytes(unsigned pass, InsertOutcome o) const;
-  virtual unsigned writeBytes(unsigned pass, InsertOutcome o) const;
+  // Default: the bytes of readRanges / writeRanges (the A-buffer adds the
+  // node it appends to its pool).
+  virtual unsigned readBytes(unsigned pass, InsertOutcome o) const { return readRanges(pass, o).bytes(); }
+  virtual unsigned writeBytes(unsigned pass, InsertOutcome o) const { return writeRanges(pass, o).bytes(); }
+  // Which bytes of the pixel's state one insert with outcome `o` reads and
+  // writes, as ranges (an upper bound where the bytes depend on the state,
+  // e.g. the rows a sorted insert shifts). Default: the whole state read; the
+  // whole state written, nothing when Discarded.
+  virtual StateRanges readRanges(unsigned pass, InsertOutcome o) const;
+  virtual StateRanges writeRanges(unsigned pass, InsertOutcome o) const;
+  // Bytes from the start of the state the resolve reads for this pixel's
+  // final state (default: all of them). Sorted rows stop after the first
+  // empty row or the row that made the transmittance exactly 0: the rows
+  // behind it add nothing (the image is the same whether or not they are read).
+  virtual unsigned resolveBytes(const uint32_t* words) const { return bytesPerPixel(); }
 
   // False for the A-buffer (unbounded lists in its own pool).
   virtual bool bounded() const { return true; }

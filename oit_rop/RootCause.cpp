@@ -45,6 +45,11 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest) 
   return w;
 }
 
+void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth) {
+  bandwidth = n && bus ? std::min<uint64_t>(n, uint64_t(double(n) * bus(from, to) + 0.5)) : 0;
+  latency = n - bandwidth;
+}
+
 void RootCauseAccount::account(Cycle now) {
   if (now <= since_) return;
   if (!wait_) {
@@ -58,7 +63,14 @@ void RootCauseAccount::account(Cycle now) {
         at = to;
       }
     };
-    charge(w_.latency_end, RootCause::DramLatency);
+    if (w_.latency_end > at) {  // the unloaded access: latency where the buses were idle
+      const Cycle to = std::min(w_.latency_end, now);
+      uint64_t lat, bw;
+      splitLatency(to - at, at, to, bus_, lat, bw);
+      cycles_[size_t(RootCause::DramLatency)] += lat;
+      cycles_[size_t(RootCause::DramBandwidth)] += bw;
+      at = to;
+    }
     charge(w_.dram_end, RootCause::DramBandwidth);
     cycles_[size_t(w_.rest)] += now - at;
   }
@@ -70,8 +82,10 @@ uint64_t RootCauseAccount::total() const { return std::accumulate(cycles_.begin(
 void DelayShares::addWait(Cycle from, Cycle to, const WaitSplit& w) {
   if (to <= from) return;
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
-  delay_[size_t(RootCause::DramLatency)] += l - from;
-  delay_[size_t(RootCause::DramBandwidth)] += e - l;
+  uint64_t lat, bw;
+  splitLatency(l - from, from, l, bus_, lat, bw);
+  delay_[size_t(RootCause::DramLatency)] += lat;
+  delay_[size_t(RootCause::DramBandwidth)] += bw + (e - l);
   delay_[size_t(w.rest)] += to - e;
 }
 
@@ -82,7 +96,9 @@ void DelayShares::addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w) 
     return;
   }
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
-  const uint64_t span = to - from, lat = n * (l - from) / span, bw = n * (e - l) / span;
+  const double busy = bus_ ? bus_(from, l) : 0.0;
+  const uint64_t span = to - from, lat_all = n * (l - from) / span;
+  const uint64_t lat = uint64_t(double(lat_all) * (1.0 - busy) + 0.5), bw = (lat_all - lat) + n * (e - l) / span;
   delay_[size_t(RootCause::DramBandwidth)] += bw;
   delay_[size_t(RootCause::DramLatency)] += lat;
   delay_[size_t(w.rest)] += n - bw - lat;

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 
 #include "oit_rop/Types.hpp"
 
@@ -60,11 +61,21 @@ struct DramProbe {
 // queueing, the transfer of the rest of its data, the rest `rest`.
 WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest = RootCause::RopCacheMiss);
 
+// The share of the DRAM buses busy over [from, to) (MemorySystem::busShare):
+// the part of a wait's unloaded access during which the buses moved other
+// data is charged to bandwidth (a shorter latency would not have shortened
+// the frame then; a faster bus would). Empty: all latency.
+using BusShareFn = std::function<double(Cycle, Cycle)>;
+
+// Splits `n` cycles of unloaded access over [from, to) into latency and bandwidth.
+void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth);
+
 // One partition's cycles by root cause, accounted lazily: a cause holds from
 // set() until the next set() with another one (as the stage accounts).
 class RootCauseAccount {
  public:
   using Cycles = std::array<uint64_t, kRootCauseCount>;
+  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
   void set(Cycle now, RootCause c) {
     if (!wait_ && c == cause_) return;
     account(now);
@@ -89,6 +100,7 @@ class RootCauseAccount {
 
  private:
   Cycles cycles_{};
+  BusShareFn bus_;
   RootCause cause_ = RootCause::Input;
   bool wait_ = false;
   WaitSplit w_;
@@ -101,6 +113,7 @@ class RootCauseAccount {
 // (largest remainders; all zero: `fallback`).
 class DelayShares {
  public:
+  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
   void add(RootCause c, uint64_t cycles) { delay_[std::size_t(c)] += cycles; }
   void addWait(Cycle from, Cycle to, const WaitSplit& w);  // [from, to) split as the WaitSplit says
   // `n` cycles in the proportions of w's parts over [from, to) (a hit that
@@ -111,6 +124,7 @@ class DelayShares {
 
  private:
   RootCauseAccount::Cycles delay_{};
+  BusShareFn bus_;
 };
 
 }  // namespace oit::rop

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <stdexcept>
 
@@ -20,7 +21,7 @@ uint8_t dummy_data[1];
 }  // namespace
 
 RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup,
-                           MemorySystem& memory)
+                           MemoryPort& shared, MemorySystem& memory)
     : sc_module(name),
       dram("dram"),
       id_(id),
@@ -34,18 +35,22 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this,
              EarlyDepth::kDepthTiles, geo_.local),
       lock_(cfg_.lock),
-      cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear,
-             geo_.local),
+      cache_(cfg_.cache,
+             TileLines{setup.layout->lineBytes(), setup.layout->sectorBytes(), setup.layout->linesPerTile()},
+             geo_.tiles(), setup.map.blend_arrays, shared, cfg_.skip.fast_clear, geo_.local, cfg_.stats.miss_classes),
       alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
       tok_(cfg_.lock.capacity),
       cache_q_(256),
       tail_q_(256),
       memory_(memory) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
+  tile_mask_ = (1u << geo_.tile_shift) - 1;
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
   for (unsigned o = 0; o < model::kOutcomeCount; ++o)
     rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
+  miss_rest_ = cfg_.l2.size_bytes || cfg_.l3.size_bytes ? RootCause::L2 : RootCause::RopCacheMiss;
+  root_.setBusShare([&memory](Cycle from, Cycle to) { return memory.busShare(from, to); });
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
@@ -83,7 +88,7 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
   if (write) last_write_done_ = std::max(last_write_done_, ext->done);
-  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe());
+  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
 
@@ -124,7 +129,7 @@ void RopPartition::opaquePhase() {
   // Without fast clear every blending-array tile is written clear at frame start.
   if (!cfg_.skip.fast_clear)
     for (uint32_t t : owned_)
-      access(now_, s_.map.blend_arrays + uint64_t(t) * s_.map.line_bytes, s_.map.line_bytes, true,
+      access(now_, s_.map.blend_arrays + uint64_t(t) * s_.map.tile_stride, s_.map.tile_stride, true,
              Surface::BlendArrays);
   const uint64_t n = front_.opaquePerPartition()[id_];
   if (n == 0) return;
@@ -193,11 +198,27 @@ void RopPartition::resolvePhase() {
   bool computing = false;
   uint32_t computing_tile = 0;
   Cycle compute_done = 0;
+  // The issuing tile's lines, the next to read and when those read so far
+  // are there. Each line read stays pinned until its tile's resolve is done
+  // (as a fragment's until its blend), so fills in flight never exceed the
+  // cache's lines: the pinned lines of the issuing tile, of each prefetched
+  // tile (in pf's order) and of the tile being resolved.
+  std::vector<LineTouch> lines;
+  size_t line_next = 0;
+  Cycle lines_ready = 0;
+  WaitSplit lines_wait;  // the wait of the tile's line that is ready last (root causes)
+  bool issuing = false;
+  std::vector<LineTouch> issuing_pins, computing_pins;
+  std::deque<std::vector<LineTouch>> pf_pins;
+  const auto unpin = [&](uint32_t tile, std::vector<LineTouch>& pins) {
+    if (!pins.empty() && cache_.release(tile, pins)) retry_at_ = 0;  // a set-refused line may go now
+    pins.clear();
+  };
   for (;;) {
     const Cycle now = now_;
     bool moved = false;
     if (computing && now >= compute_done) {
-      releaseLine(computing_tile);
+      unpin(computing_tile, computing_pins);
       access(now, s_.map.colour + uint64_t(computing_tile) * s_.map.tile4_bytes, s_.map.tile4_bytes, true,
              Surface::Resolve);
       computing = false;
@@ -207,23 +228,65 @@ void RopPartition::resolvePhase() {
     unsigned acquired = 0;
     bool refused = false;
     while (next_issue < tiles.size() && pf.size() < kResolvePrefetch && acquired < cache_ports_) {
-      Cycle r = 0;
-      if (!acquireGated(now, tiles[next_issue], false, r)) {
+      // A tile's lines are read as one issue (one cache port); when the miss
+      // queue lacks entries for the rest, they follow once entries free.
+      const uint32_t t = tiles[next_issue];
+      if (!issuing) {
+        resolveLines(t, lines);
+        line_next = 0;
+        lines_ready = now;
+        lines_wait = WaitSplit{now, now, now, RootCause::RopCacheMiss};
+        issuing = true;
+      }
+      if (now < retry_at_) {
         refused = true;
         break;
       }
-      // The tile's other inputs are fetched with its line, and the resolve of
+      while (line_next < lines.size()) {
+        const std::span<const LineTouch> line(&lines[line_next], 1);
+        memory_.resetProbe();
+        const uint64_t misses = cache_.stats().misses;
+        const Cycle r = cache_.acquire(now, t, line);
+        if (r == kNever) {
+          if (!cache_.refusedBySet()) {
+            retry_at_ = cache_.missQueueFreesAt();
+          } else if (pf.empty() && !computing && !issuing_pins.empty()) {
+            // Only this tile's own lines hold the set (more of its lines in
+            // one set than ways): they were read, so they go, and the read goes on.
+            unpin(t, issuing_pins);
+            continue;
+          } else {
+            retry_at_ = kNever;  // until a resolved tile's lines are released
+          }
+          refused = true;
+          break;
+        }
+        issuing_pins.push_back(lines[line_next]);
+        if (r > lines_ready) {
+          lines_ready = r;
+          // A miss: its memory; a hit under a fill in flight: the latest miss's.
+          lines_wait = cache_.stats().misses != misses ? splitWait(now, r, memory_.probe(), miss_rest_)
+                       : r > now + cfg_.cache.hit_latency ? last_miss_
+                                                           : WaitSplit{now, now, now, RootCause::RopCacheMiss};
+          if (cache_.stats().misses != misses) last_miss_ = lines_wait;
+        }
+        ++line_next;
+      }
+      if (refused) break;
+      issuing = false;
+      pf_pins.push_back(std::move(issuing_pins));
+      issuing_pins.clear();
+      // The tile's other inputs are fetched with its lines, and the resolve of
       // the tile waits for all of them: the opaque colour it composites over
       // (where an opaque fragment landed) and, for the A-buffer, its node
       // lists (every node of the tile read once).
-      const uint32_t t = tiles[next_issue];
-      Cycle data = r;
+      Cycle data = lines_ready;
       // The wait's root causes follow the input that arrives last.
-      WaitSplit wait = r > now + cfg_.cache.hit_latency ? last_miss_ : WaitSplit{now, now, now, RootCause::RopCacheMiss};
+      WaitSplit wait = lines_wait;
       auto input = [&](Cycle ready) {
         if (ready > data) {
           data = ready;
-          wait = splitWait(now, ready, memory_.probe());
+          wait = splitWait(now, ready, memory_.probe(), miss_rest_);
         }
       };
       if (front_.opaqueLanded()[t] != 0)
@@ -249,6 +312,8 @@ void RopPartition::resolvePhase() {
       } else {
         const uint32_t t = pf.front().tile;
         pf.pop();
+        computing_pins = std::move(pf_pins.front());
+        pf_pins.pop_front();
         uint64_t work = geo_.tilePixels();
         if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // list traversal
         computing = true;
@@ -294,6 +359,28 @@ void RopPartition::resolvePhase() {
       while (now_ < end) advance(now_ + 1, true);
   }
   setStatus(Stage::Resolve, StageStatus::idle());
+}
+
+void RopPartition::resolveLines(uint32_t t, std::vector<LineTouch>& out) {
+  // The sectors holding the bytes the resolve reads of each pixel (its
+  // final state: resolveBytes), of the lines this frame wrote (fast clear:
+  // the others hold the clear value, known on chip).
+  const ArrayLayout& layout = *s_.layout;
+  resolve_fill_.assign(layout.linesPerTile(), 0);
+  const uint32_t tx = t % geo_.tiles_x, ty = t / geo_.tiles_x;
+  const uint32_t words = s_.algo->stateWords();
+  const uint32_t* state = front_.state().data();
+  for (uint32_t i = 0; i < geo_.tilePixels(); ++i) {
+    const uint32_t x = tx * geo_.tile_w + i % geo_.tile_w, y = ty * geo_.tile_h + i / geo_.tile_w;
+    if (x >= geo_.width || y >= geo_.height) continue;
+    const uint32_t* w = state + (size_t(y) * geo_.width + x) * words;
+    layout.addPrefixRead(i, s_.algo->resolveBytes(w), resolve_fill_.data());
+  }
+  out.clear();
+  for (uint32_t l = 0; l < layout.linesPerTile(); ++l) {
+    const uint32_t fill = resolve_fill_[l] & (cfg_.skip.fast_clear ? cache_.writtenSectors(t, l) : ~0u);
+    if (fill) out.push_back({l, fill, 0});
+  }
 }
 
 void RopPartition::run() {

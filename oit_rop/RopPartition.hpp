@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/memory/ArrayLayout.hpp"
 #include "oit_rop/stages/BlendArrayRmw.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
@@ -36,10 +37,10 @@ namespace oit::rop {
 class CycleEngine;
 class ApproximateEngine;
 
-// DRAM address map of the frame's surfaces (tile-linear).
+// Address map of the frame's surfaces (tile-linear; MEMORY.md).
 struct AddressMap {
   uint64_t blend_arrays = 0, depth = 0, colour = 0, node_pool = 0;
-  uint32_t line_bytes = 0;   // one tile of blending arrays (A-buffer: heads)
+  uint32_t tile_stride = 0;  // one tile of blending arrays (A-buffer: heads), whole cache lines (ArrayLayout)
   uint32_t tile4_bytes = 0;  // one tile of a 4 B/pixel surface
 };
 
@@ -47,6 +48,9 @@ struct PartitionSetup {
   const RopConfig* cfg = nullptr;
   const FrameGeometry* geo = nullptr;
   FrontEnd* front = nullptr;
+  const model::OitAlgorithm* algo = nullptr;  // resolveBytes (what the resolve reads)
+  const ArrayLayout* layout = nullptr;        // where the arrays' bytes are
+  const FragmentLines* lines = nullptr;       // the lines each insert touches
   AddressMap map;
   unsigned array_rows = 0;   // layout rows (for rowsFor)
   double format_rate = 1.0;  // BlendAlu throughput factor
@@ -71,7 +75,11 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   tlm_utils::simple_initiator_socket<RopPartition> dram;
 
   SC_HAS_PROCESS(RopPartition);
-  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemorySystem& memory);
+  // `shared`: the first shared memory level (l2, else DRAM), for the cache's fills and write-backs.
+  // `shared`: the first level below the ROP cache (l2, else DRAM); `memory`:
+  // the DRAM controller, whose write queues the partition drains at its end.
+  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemoryPort& shared,
+               MemorySystem& memory);
   ~RopPartition() override;
 
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
@@ -101,8 +109,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // fragment carries from issue to release, indexed by its scoreboard token,
   // and the queues after the lock.
   struct TokenInfo {
-    uint32_t tile;
-    uint8_t flags, outcome, rows;
+    uint32_t pixel;  // in tile order (InRec::pixel)
+    uint8_t flags, outcome, rows;  // outcome: InRec's kind (culled: kCulledKind)
   };
   struct CacheEntry {  // a fragment between lock entry and its blend slot
     uint32_t token;
@@ -154,9 +162,17 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   void opaquePhase();
   void waitForFrontEnd();
   void resolvePhase();
+  // The lines (and sectors) the resolve of tile t reads.
+  void resolveLines(uint32_t t, std::vector<LineTouch>& out);
+  uint32_t tileOf(uint32_t pixel) const { return pixel >> geo_.tile_shift; }
+  // The lines a fragment of this pass touches (FragmentLines): kind = InRec's.
+  std::span<const LineTouch> linesOf(uint32_t pixel, uint8_t kind) const {
+    const FragmentLines::Span l = s_.lines->lines(pass_, kind & (FragmentLines::kKinds - 1), pixel & tile_mask_);
+    return {l.begin, l.count};
+  }
   // BlendArrayCache::release, re-enabling a set-refused retry.
-  void releaseLine(uint32_t tile) {
-    if (cache_.release(tile)) retry_at_ = 0;  // the refused access's set has a line out of use now
+  void releaseLines(uint32_t pixel, uint8_t kind) {
+    if (cache_.release(tileOf(pixel), linesOf(pixel, kind))) retry_at_ = 0;  // the refused access's set has a line out of use now
   }
   void nodeWrite();
   void refillInput() {
@@ -164,8 +180,9 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     while (q.empty() && front_.canRefill()) front_.refill();
     starving_ = q.empty() && !front_.exhausted();
   }
-  // BlendArrayCache::acquire, not called before retry_at_ (false: refused; ready: when the line is there).
-  bool acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready) {
+  // BlendArrayCache::acquire of a fragment's lines, not called before
+  // retry_at_ (false: refused; ready: when the lines are there).
+  bool acquireGated(Cycle now, uint32_t pixel, uint8_t kind, Cycle& ready) {
     // While every miss-queue entry is busy a retry would be refused again: no call
     // until the first entry frees, so the refusals counted (cache.miss_queue_full:
     // one per access that had to wait) and the cycle the access goes through do
@@ -175,12 +192,12 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     if (now < retry_at_) return false;
     memory_.resetProbe();
     const uint64_t misses = cache_.stats().misses;
-    ready = cache_.acquire(now, tile, write);
+    ready = cache_.acquire(now, tileOf(pixel), linesOf(pixel, kind));
     if (ready != kNever) {
       // A miss waits for memory (a fast-clear fill for the cache alone); a
       // hit under a fill in flight for that fill, which the partition's
       // latest miss stands for.
-      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe());
+      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
       return true;
     }
     retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
@@ -208,6 +225,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
   Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees (kNever: until a line of the set is released)
+  uint32_t tile_mask_;  // tile pixels - 1
   unsigned cache_ports_;              // cache accesses per cycle (ceil(alu.blends_per_clock))
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
@@ -222,6 +240,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   RootCauseAccount root_;     // this partition's cycles by root cause
   WaitSplit last_miss_;       // the latest blend-array miss's wait (root causes)
   WaitSplit last_depth_;      // the latest depth-tile read's wait
+  RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
+  std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
   Cycle last_write_done_ = 0;

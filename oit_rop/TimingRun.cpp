@@ -12,8 +12,11 @@
 #include <numeric>
 #include <stdexcept>
 #include <tlm>
+#include <unordered_map>
 
 #include "oit_rop/Bottleneck.hpp"
+#include "oit_rop/memory/ArrayLayout.hpp"
+#include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/stages/BlendAlu.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/OitRop.hpp"
@@ -90,6 +93,68 @@ json bySurface(const std::array<uint64_t, kSurfaceCount>& v) {
   return j;
 }
 
+// An insert gets all its lines or waits (BlendArrayCache::acquire), so the
+// cache must have a miss-queue entry for each and the ways for those that
+// share a set.
+void checkCacheServesInserts(const RopConfig& cfg, const CacheGeometry& g, const FragmentLines& lines,
+                             const model::OitAlgorithm& algo) {
+  const char* layout = cfg.memory.array_layout == ArrayLayoutKind::RowMajor ? "row_major" : "pixel_major";
+  if (lines.maxLines() > cfg.cache.miss_queue)
+    throw std::invalid_argument(fmt::format(
+        "cache.miss_queue ({}) is smaller than the {} cache lines one {} insert touches ({} bytes per pixel, "
+        "memory.array_layout {}, cache.line_bytes {}): an insert gets all its lines or waits, so it could never "
+        "start; raise cache.miss_queue or cache.line_bytes",
+        cfg.cache.miss_queue, lines.maxLines(), algo.name(), algo.bytesPerPixel(), layout, cfg.cache.line_bytes));
+  const uint32_t in_set = lines.maxLinesInOneSet(g.sets);
+  if (in_set > g.ways)
+    throw std::invalid_argument(fmt::format(
+        "one {} insert touches {} lines of one set of the cache but a set has {} ways (cache.ways {}, {} sets; "
+        "memory.array_layout {}): it could never get them all; raise cache.ways or cache.size_bytes, or use "
+        "pixel_major",
+        algo.name(), in_set, g.ways, cfg.cache.ways, g.sets, layout));
+}
+
+// One cache level's figures for memory.levels[] (report.json).
+json levelJson(const std::string& name, const LevelStats& l) {
+  const uint64_t accesses = LevelStats::total(l.accesses), hits = LevelStats::total(l.hits);
+  json by = json::object();
+  for (unsigned i = 0; i < kSurfaceCount; ++i)
+    by[surfaceKey(Surface(i))] = {{"accesses", l.accesses[i]},       {"hits", l.hits[i]},
+                                  {"misses", l.misses[i]},           {"read_bytes", l.read_bytes[i]},
+                                  {"write_bytes", l.write_bytes[i]}, {"fill_bytes", l.fill_bytes[i]},
+                                  {"writeback_bytes", l.writeback_bytes[i]}, {"writebacks", l.writebacks[i]}};
+  return {{"name", name},
+          {"accesses", accesses},
+          {"hits", hits},
+          {"misses", LevelStats::total(l.misses)},
+          {"hit_rate", accesses ? double(hits) / double(accesses) : 0.0},
+          {"read_bytes", LevelStats::total(l.read_bytes)},
+          {"write_bytes", LevelStats::total(l.write_bytes)},
+          {"fill_bytes", LevelStats::total(l.fill_bytes)},
+          {"writeback_bytes", LevelStats::total(l.writeback_bytes)},
+          {"writebacks", LevelStats::total(l.writebacks)},
+          {"victims_in", l.victims_in},
+          {"miss_classes", true},
+          {"compulsory_misses", l.compulsory_misses},
+          {"capacity_misses", l.capacity_misses},
+          {"conflict_misses", l.conflict_misses},
+          {"by_surface", by}};
+}
+
+// Bytes still dirty somewhere in the hierarchy at the frame's end, per
+// surface: each byte once, whichever levels hold it (the upper level's copy
+// first: it is the newer one). The ranges of all levels are multiples of
+// `unit` bytes, aligned.
+std::array<uint64_t, kSurfaceCount> endDirtyBytes(const std::vector<std::vector<DirtyRange>>& by_level, uint32_t unit) {
+  std::unordered_map<uint64_t, Surface> held;  // unit address -> surface
+  for (const auto& ranges : by_level)
+    for (const DirtyRange& r : ranges)
+      for (uint64_t a = r.addr / unit * unit; a < r.addr + r.bytes; a += unit) held.emplace(a, r.surface);
+  std::array<uint64_t, kSurfaceCount> bytes{};
+  for (const auto& [addr, surface] : held) bytes[unsigned(surface)] += unit;
+  return bytes;
+}
+
 }  // namespace
 
 std::string vcdFilePath(const std::string& path) {
@@ -128,9 +193,12 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   const model::DrawClassifier classes(h);
   algo.beginFrame(h);
   const FrameGeometry geo(h.width, h.height, cfg.partitions, cfg.lock.granularity);
-  const uint32_t line_bytes = geo.tilePixels() * algo.bytesPerPixel();  // one tile of the algorithm's arrays
-  // The tile cache must hold one line: refused here, before any work, with the option to change.
-  cacheGeometry(cfg.cache, line_bytes);
+  // Where the arrays live and which lines each insert touches; refused here,
+  // before any work, when the cache could never serve an insert.
+  const ArrayLayout layout(algo.layout(), algo.bytesPerPixel(), geo.tilePixels(), cfg.memory.array_layout,
+                           cfg.cache.line_bytes, cfg.cache.sector_bytes);
+  const FragmentLines lines(algo, layout, geo.tilePixels());
+  checkCacheServesInserts(cfg, cacheGeometry(cfg.cache, cfg.cache.line_bytes), lines, algo);
   if (opt.progress) opt.progress(0.0, "opaque");
   // The opaque phase's work per partition, counted in the same read.
   std::vector<uint64_t> opaque_per_part(geo.partitions, 0);
@@ -142,10 +210,10 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
 
   // Address map: tile-linear surfaces, each 1 MiB aligned.
   AddressMap map;
-  map.line_bytes = line_bytes;
+  map.tile_stride = layout.tileStride();
   map.tile4_bytes = geo.tilePixels() * 4;
   map.blend_arrays = 0;
-  map.depth = alignUp(uint64_t(geo.tiles()) * map.line_bytes, 1u << 20);
+  map.depth = alignUp(uint64_t(geo.tiles()) * map.tile_stride, 1u << 20);
   map.colour = map.depth + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
   map.node_pool = map.colour + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
 
@@ -153,6 +221,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   setup.cfg = &cfg;
   setup.geo = &geo;
   setup.front = &front;
+  setup.algo = &algo;
+  setup.layout = &layout;
+  setup.lines = &lines;
   setup.map = map;
   setup.array_rows = algo.layout().rows;
   setup.format_rate = BlendAlu::formatRate(cfg.alu, algo.layout());
@@ -183,6 +254,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   uint64_t node_w = 0, node_r = 0;
   LockStats lock{};
   CacheStats cache{};
+  uint64_t arrays_written = 0;             // the ROP caches' written sectors, in bytes
+  std::vector<DirtyRange> dirty_rop;       // the ROP caches' dirty sectors at the end
+  std::vector<std::vector<DirtyRange>> dirty_by_level(1);
   EarlyDepthStats depth{};
   AluStats alu{};
   std::vector<uint64_t> part_frags;
@@ -227,16 +301,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     lock.out_of_order_entries += l.out_of_order_entries;
     lock.entries += l.entries;
     lock.peak_occupancy = std::max(lock.peak_occupancy, l.peak_occupancy);
-    const CacheStats& c = p.cache().stats();
-    cache.accesses += c.accesses;
-    cache.hits += c.hits;
-    cache.misses += c.misses;
-    cache.clear_fills += c.clear_fills;
-    cache.evictions += c.evictions;
-    cache.writebacks += c.writebacks;
-    cache.miss_queue_full += c.miss_queue_full;
-    cache.set_in_use += c.set_in_use;
-    cache.peak_misses_in_flight = std::max(cache.peak_misses_in_flight, c.peak_misses_in_flight);
+    cache += p.cache().stats();
+    arrays_written += p.cache().writtenBytes();
+    p.cache().dirtyRanges(dirty_rop);
     const EarlyDepthStats& d = p.earlyDepth().stats();
     depth.tested += d.tested;
     depth.depth_reads += d.depth_reads;
@@ -353,22 +420,74 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
   peak_gbps = std::max(peak_gbps, mean_gbps);
 
-  uint32_t touched_tiles = 0, landed_tiles = 0;
+  uint32_t landed_tiles = 0, landed_resolved = 0;
   for (uint32_t t = 0; t < geo.tiles(); ++t) {
-    // Without fast clear every tile's arrays are written clear at frame start.
-    if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++touched_tiles;
-    if (front.opaqueLanded()[t]) ++landed_tiles;
+    if (!front.opaqueLanded()[t]) continue;
+    ++landed_tiles;
+    // Resolved tiles: every one without fast clear, else those a fragment wrote.
+    if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++landed_resolved;
   }
   const uint64_t wh = uint64_t(h.width) * h.height;
   const uint64_t nodes = algo.bounded() ? 0 : rc.stored;
+  // The arrays' bytes written: the sectors the inserts wrote, or (no fast
+  // clear) every tile's, written clear at frame start; the A-buffer's nodes.
+  const uint64_t arrays_touched =
+      (cfg.skip.fast_clear ? arrays_written : uint64_t(geo.tiles()) * map.tile_stride) + node_w;
   json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + 12 * nodes},
                     {"depth", 4 * wh},
                     {"colour", 4 * wh},
                     {"resolve", 0}};
-  json touched = {{"blend_arrays", uint64_t(touched_tiles) * map.line_bytes + (algo.bounded() ? 0 : 12 * nodes)},
+  json touched = {{"blend_arrays", arrays_touched},
                   {"depth", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"colour", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"resolve", tiles_resolved * map.tile4_bytes}};
+  // Compulsory traffic (MEMORY.md): what a perfect, infinite cache would
+  // still move: every byte the frame writes leaves the chip once (written back
+  // when evicted, or still dirty at the end); nothing is read that the frame
+  // did not write first (a resolve-written colour tile counts as resolve).
+  std::array<uint64_t, kSurfaceCount> compulsory{};
+  compulsory[unsigned(Surface::BlendArrays)] = arrays_touched;
+  compulsory[unsigned(Surface::Depth)] = uint64_t(landed_tiles) * map.tile4_bytes;
+  compulsory[unsigned(Surface::Colour)] = uint64_t(landed_tiles - landed_resolved) * map.tile4_bytes;
+  compulsory[unsigned(Surface::Resolve)] = tiles_resolved * map.tile4_bytes;
+  // Left dirty at the end, in the ROP caches and the shared levels: moved later
+  // (when evicted), so counted beside the frame's DRAM bytes against compulsory.
+  uint32_t unit = layout.sectorBytes();
+  dirty_by_level[0] = std::move(dirty_rop);
+  for (const CacheLevel* l : {top->l2(), top->l3()}) {
+    if (!l) continue;
+    dirty_by_level.emplace_back();
+    l->dirtyRanges(dirty_by_level.back());
+    unit = std::min(unit, l->sectorBytes());
+  }
+  const std::array<uint64_t, kSurfaceCount> end_dirty = endDirtyBytes(dirty_by_level, unit);
+  uint64_t compulsory_total = 0, end_dirty_total = 0;
+  for (unsigned i = 0; i < kSurfaceCount; ++i) {
+    compulsory_total += compulsory[i];
+    end_dirty_total += end_dirty[i];
+  }
+  const uint64_t moved = ms.readBytes() + ms.writeBytes() + end_dirty_total;
+  json levels = json::array();
+  {
+    const uint64_t rop_misses = cache.misses;
+    json rop = {{"name", "rop_cache"},
+                {"accesses", cache.accesses},
+                {"hits", cache.hits},
+                {"misses", rop_misses},
+                {"hit_rate", cache.hitRate()},
+                {"read_bytes", cache.read_bytes},
+                {"write_bytes", cache.write_bytes},
+                {"fill_bytes", cache.fill_bytes},
+                {"writeback_bytes", cache.writeback_bytes},
+                {"writebacks", cache.writebacks},
+                {"miss_classes", cfg.stats.miss_classes},
+                {"compulsory_misses", cache.compulsory_misses},
+                {"capacity_misses", cache.capacity_misses},
+                {"conflict_misses", cache.conflict_misses}};
+    levels.push_back(rop);
+    if (top->l2()) levels.push_back(levelJson("l2", top->l2()->stats()));
+    if (top->l3()) levels.push_back(levelJson("l3", top->l3()->stats()));
+  }
   json memory = {{"dram_read_bytes", bySurface(ms.read_bytes)},
                  {"dram_write_bytes", bySurface(ms.write_bytes)},
                  {"requests", ms.requests},
@@ -379,7 +498,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"channel_peak_gbps", channel_peak_gbps},
                  {"node_pool_bytes_written", node_w},
                  {"node_pool_bytes_read", node_r},
-                 {"footprint", {{"allocated", allocated}, {"touched", touched}}}};
+                 {"footprint", {{"allocated", allocated}, {"touched", touched}}},
+                 {"compulsory_bytes", bySurface(compulsory)},
+                 {"end_dirty_bytes", bySurface(end_dirty)},
+                 {"traffic_over_compulsory", compulsory_total ? double(moved) / double(compulsory_total) : 0.0},
+                 {"levels", levels}};
   json lockj = {{"conflicts", lock.conflicts},
                 {"wait_cycles", lock.wait_cycles},
                 {"longest_wait", lock.longest_wait},
@@ -394,7 +517,15 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"clear_fills", cache.clear_fills},     {"evictions", cache.evictions},
                  {"writebacks", cache.writebacks},       {"miss_queue_full", cache.miss_queue_full},
                  {"set_in_use", cache.set_in_use},
-                 {"peak_misses_in_flight", cache.peak_misses_in_flight}, {"line_bytes", map.line_bytes}};
+                 {"peak_misses_in_flight", cache.peak_misses_in_flight},
+                 {"sector_misses", cache.sector_misses},
+                 {"hits_under_miss", cache.hits_under_miss},
+                 {"line_bytes", layout.lineBytes()},
+                 {"sector_bytes", layout.sectorBytes()},
+                 {"lines_per_tile", layout.linesPerTile()},
+                 {"tile_stride_bytes", layout.tileStride()},
+                 {"array_layout", cfg.memory.array_layout == ArrayLayoutKind::RowMajor ? "row_major" : "pixel_major"},
+                 {"max_lines_per_insert", lines.maxLines()}};
   json skips = {{"early_depth_culled", culled_early},
                 {"late_culled", culled_late},
                 {"tiles_skipped_fast_clear", tiles_skipped},

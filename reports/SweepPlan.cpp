@@ -254,7 +254,7 @@ Plan planSweep(const ojson& spec, const std::string& specPath, const fs::path& o
       p.id = fmt::format("{:04d}-{}", plan.points.size(), sanitize(label));
       planned.emplace(key, p.id);
       // The point's ROP configuration is resolved now, as `oitsim run` resolves
-      // it in both modes (a preset unset: the config file's, else igpu), so a
+      // it in both modes (a preset unset: the config file's, else iris-pro-5200), so a
       // combination that breaks a constraint stops the sweep before anything
       // runs instead of failing every point.
       {

@@ -69,7 +69,7 @@ bool isWhole(const ojson& v, long long min) {
 void validateRopParameter(const std::string& key, const ojson& v, const std::string& where) {
   const std::string text = scalarText(v, where);  // its own error names `where` once
   try {
-    rop::ConfigTree::forPreset("igpu").set(key, text);
+    rop::ConfigTree::forPreset("iris-pro-5200").set(key, text);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(where + ": " + key + " = " + v.dump() + ": " + e.what());
   }
@@ -126,8 +126,9 @@ void validateSetting(const std::string& key, const ojson& v, const std::string& 
       bad("functional or timing");
   } else if (key == "preset") {
     const auto names = rop::presetNames();
-    if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
-      bad("a ROP preset (" + joinNames(names) + ")");
+    if (!v.is_string() ||
+        std::find(names.begin(), names.end(), rop::canonicalPresetName(v.get<std::string>())) == names.end())
+      bad("a ROP preset (" + joinNames(names) + "; aliases igpu, dgpu)");
   } else if (key == "config") {
     if (!v.is_string()) bad("a ROP config file path");
     try {

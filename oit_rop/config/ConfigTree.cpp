@@ -132,7 +132,7 @@ const std::vector<Property>& registry() {
       integer("partitions.count", &R::partitions, &PartitionConfig::count, 1, 64, "",
               "ROP partitions; screen tiles are interleaved over them"),
       integer("partitions.tile_width", &R::partitions, &PartitionConfig::tile_width, 1, 64, "pixels",
-              "screen tile width; one tile = one blending-array cache line", true),
+              "screen tile width; tiles are the unit of the partition interleave, HiZ, tile locks, fast clear and resolve", true),
       integer("partitions.tile_height", &R::partitions, &PartitionConfig::tile_height, 1, 64, "pixels",
               "screen tile height", true),
 
@@ -176,11 +176,51 @@ const std::vector<Property>& registry() {
               "end of blend to end of shader (release = end_of_shader)"),
 
       integer("cache.size_bytes", &R::cache, &CacheConfig::size_bytes, 1024, uint64_t(1) << 30, "bytes",
-              "blending-array tile cache per partition (line = one tile's arrays)"),
+              "the ROP's blending-array cache, per partition"),
       integer("cache.ways", &R::cache, &CacheConfig::ways, 1, 64, "", "cache associativity (LRU)"),
       integer("cache.miss_queue", &R::cache, &CacheConfig::miss_queue, 1, 4096, "lines",
-              "outstanding line fills per partition"),
+              "outstanding line fills per partition (one entry per missing line)"),
       integer("cache.hit_latency", &R::cache, &CacheConfig::hit_latency, 1, 10000, "cycles", "cache hit latency"),
+      integer("cache.line_bytes", &R::cache, &CacheConfig::line_bytes, 32, 1024, "bytes",
+              "cache line (one tag); a fragment touches the lines holding the bytes its insert reads and writes",
+              true),
+      integer("cache.sector_bytes", &R::cache, &CacheConfig::sector_bytes, 0, 1024, "bytes",
+              "fill and write-back unit inside a line (valid and dirty per sector); 0 = the whole line"),
+
+      enumeration("memory.array_layout", &R::memory, &MemoryLayoutConfig::array_layout, {"pixel_major", "row_major"},
+                  "per-pixel arrays of a tile in memory: pixel_major = each pixel's array contiguous, pixels in "
+                  "tile order; row_major = row i of every pixel of the tile contiguous (MEMORY.md)"),
+
+      integer("l2.size_bytes", &R::l2, &SharedCacheConfig::size_bytes, 0, uint64_t(1) << 32, "bytes",
+              "shared cache between every partition and DRAM (or the l3); 0 = none"),
+      integer("l2.ways", &R::l2, &SharedCacheConfig::ways, 1, 64, "", "l2 associativity per slice (LRU)"),
+      integer("l2.line_bytes", &R::l2, &SharedCacheConfig::line_bytes, 32, 4096, "bytes", "l2 cache line", true),
+      integer("l2.sector_bytes", &R::l2, &SharedCacheConfig::sector_bytes, 0, 4096, "bytes",
+              "l2 fill and write-back unit inside a line; 0 = the whole line"),
+      integer("l2.slices", &R::l2, &SharedCacheConfig::slices, 1, 256, "",
+              "l2 slices: lines are spread over them by an address hash; each slice has its own port"),
+      integer("l2.hit_latency", &R::l2, &SharedCacheConfig::hit_latency, 1, 100000, "cycles",
+              "l2 hit latency (request to data, unloaded)"),
+      real("l2.bytes_per_clock", &R::l2, &SharedCacheConfig::bytes_per_clock, 0.01, false, 4096, "bytes/clock",
+           "l2 port bandwidth per slice, in core clocks"),
+      boolean("l2.victim_only", &R::l2, &SharedCacheConfig::victim_only,
+              "l2 is filled only with the evictions of the level above (a victim cache); reads that miss it do "
+              "not allocate"),
+      integer("l3.size_bytes", &R::l3, &SharedCacheConfig::size_bytes, 0, uint64_t(1) << 32, "bytes",
+              "a further shared level of the same kind behind the l2; 0 = none"),
+      integer("l3.ways", &R::l3, &SharedCacheConfig::ways, 1, 64, "", "l3 associativity per slice (LRU)"),
+      integer("l3.line_bytes", &R::l3, &SharedCacheConfig::line_bytes, 32, 4096, "bytes", "l3 cache line", true),
+      integer("l3.sector_bytes", &R::l3, &SharedCacheConfig::sector_bytes, 0, 4096, "bytes",
+              "l3 fill and write-back unit inside a line; 0 = the whole line"),
+      integer("l3.slices", &R::l3, &SharedCacheConfig::slices, 1, 256, "",
+              "l3 slices: lines are spread over them by an address hash; each slice has its own port"),
+      integer("l3.hit_latency", &R::l3, &SharedCacheConfig::hit_latency, 1, 100000, "cycles",
+              "l3 hit latency (request to data, unloaded)"),
+      real("l3.bytes_per_clock", &R::l3, &SharedCacheConfig::bytes_per_clock, 0.01, false, 4096, "bytes/clock",
+           "l3 port bandwidth per slice, in core clocks"),
+      boolean("l3.victim_only", &R::l3, &SharedCacheConfig::victim_only,
+              "l3 is filled only with the evictions of the level above (a victim cache); reads that miss it do "
+              "not allocate"),
 
       integer("alu.blends_per_clock", &R::alu, &AluConfig::blends_per_clock, 1, 1024, "blends/clock",
               "RGBA8-rate blend inserts per clock, per partition"),
@@ -248,6 +288,9 @@ const std::vector<Property>& registry() {
       integer("stats.max_samples", &R::stats, &StatsConfig::max_samples, 2, 1u << 24, "",
               "time-series length limit: on reaching it, pairs of samples merge and the period doubles "
               "(even; an odd value counts as the next lower even one)"),
+      boolean("stats.miss_classes", &R::stats, &StatsConfig::miss_classes,
+              "classify the ROP cache's misses as compulsory, capacity or conflict (a fully associative shadow "
+              "cache, updated on every line access; the shared levels always classify theirs)"),
 
       boolean("skip.early_depth", &R::skip, &SkipConfig::early_depth,
               "culled fragments skip lock and cache (else they pass through both)"),
@@ -488,7 +531,7 @@ void ConfigTree::applyJson(const nlohmann::json& j, const std::string& origin) {
       const std::string path = prefix.empty() ? key : prefix + "." + key;
       const std::string shown = prefix.empty() ? key : prefix + "/" + key;  // where it sits in the file
       if (prefix.empty() && key == "preset") {
-        if (!val.is_string() || val.get<std::string>() != cfg_.preset)
+        if (!val.is_string() || canonicalPresetName(val.get<std::string>()) != cfg_.preset)
           throw std::invalid_argument(fmt::format(
               "{}: key 'preset': the file is for preset {} but the tree was built from preset '{}'; pass "
               "--preset {} (or drop the key)",
@@ -558,13 +601,53 @@ void ConfigTree::validate() const {
         "lock.granularity quad needs partitions.tile_width and tile_height of at least 2 (now {} x {}): a 2x2 quad "
         "across two tiles would be split over partitions and locked in parts",
         c.partitions.tile_width, c.partitions.tile_height));
-  // Each way must hold whole lines even for the smallest array (4 bytes per
-  // pixel); cacheGeometry() settles the real line size once the algorithm is known.
-  const uint64_t min_set = uint64_t(c.cache.ways) * c.partitions.tile_width * c.partitions.tile_height * 4;
-  if (c.cache.size_bytes % min_set != 0)
+  // The ROP cache: lines hold whole sectors, the cache whole sets of lines.
+  const auto sectorProblems = [&](const std::string& n, unsigned line, unsigned sector) {
+    if (sector == 0) return;
+    if (sector > line || line % sector != 0 || (sector & (sector - 1)) != 0)
+      errs.push_back(fmt::format("{0}.sector_bytes ({1}) must be a power of two dividing {0}.line_bytes ({2})", n,
+                                 sector, line));
+    else if (line / sector > 32)
+      errs.push_back(fmt::format("{0}.line_bytes ({1}) holds {2} sectors of {0}.sector_bytes ({3}); at most 32 are "
+                                 "modelled (valid and dirty masks of 32 bits)",
+                                 n, line, line / sector, sector));
+    if (sector != 0 && sector < 8)
+      errs.push_back(fmt::format("{}.sector_bytes ({}) must be at least 8 (or 0, the whole line)", n, sector));
+  };
+  if (c.cache.line_bytes > c.cache.size_bytes)
+    errs.push_back(fmt::format("cache.line_bytes ({}) is larger than the cache, cache.size_bytes ({})",
+                               c.cache.line_bytes, c.cache.size_bytes));
+  else if (c.cache.size_bytes % (uint64_t(c.cache.ways) * c.cache.line_bytes) != 0)
     errs.push_back(fmt::format(
-        "cache.size_bytes ({}) is not a multiple of cache.ways x tile pixels x 4 bytes ({} x {} x 4 = {})",
-        c.cache.size_bytes, c.cache.ways, c.partitions.tile_width * c.partitions.tile_height, min_set));
+        "cache.size_bytes ({}) is not a multiple of cache.ways x cache.line_bytes ({} x {} = {}): every set holds "
+        "whole lines",
+        c.cache.size_bytes, c.cache.ways, c.cache.line_bytes, uint64_t(c.cache.ways) * c.cache.line_bytes));
+  sectorProblems("cache", c.cache.line_bytes, c.cache.sector_bytes);
+  // The shared levels: l3 behind l2, lines no smaller than the level above's
+  // (a line above must fit in one line below).
+  const auto levelProblems = [&](const std::string& n, const SharedCacheConfig& l, const std::string& above,
+                                 unsigned above_line) {
+    if (l.size_bytes == 0) return;
+    if (l.line_bytes < above_line)
+      errs.push_back(fmt::format("{}.line_bytes ({}) is smaller than {}.line_bytes ({}): a line of the level above "
+                                 "must fit in one {} line",
+                                 n, l.line_bytes, above, above_line, n));
+    const uint64_t set_bytes = uint64_t(l.ways) * l.line_bytes * l.slices;
+    if (l.line_bytes > l.size_bytes)
+      errs.push_back(
+          fmt::format("{}.line_bytes ({}) is larger than the cache, {}.size_bytes ({})", n, l.line_bytes, n, l.size_bytes));
+    else if (l.size_bytes % set_bytes != 0)
+      errs.push_back(fmt::format("{0}.size_bytes ({1}) is not a multiple of {0}.slices x {0}.ways x {0}.line_bytes "
+                                 "({2} x {3} x {4} = {5}): every slice holds whole sets",
+                                 n, l.size_bytes, l.slices, l.ways, l.line_bytes, set_bytes));
+    sectorProblems(n, l.line_bytes, l.sector_bytes);
+  };
+  levelProblems("l2", c.l2, "cache", c.cache.line_bytes);
+  if (c.l3.size_bytes != 0 && c.l2.size_bytes == 0)
+    errs.push_back("l3.size_bytes is set but l2.size_bytes is 0: the l3 is the level behind the l2 (to model one "
+                   "shared level, set l2.* instead)");
+  else
+    levelProblems("l3", c.l3, "l2", c.l2.line_bytes);
   if (c.dram.burst_bytes > c.dram.interleave_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.interleave_bytes ({}): a burst would span channels",
                                c.dram.burst_bytes, c.dram.interleave_bytes));
@@ -682,7 +765,7 @@ ConfigTree resolveTree(const std::string& preset, const std::string& config_file
     if (name.empty() && file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
       name = file_json["preset"].get<std::string>();
   }
-  if (name.empty()) name = "igpu";
+  if (name.empty()) name = "iris-pro-5200";
   ConfigTree tree = ConfigTree::forPreset(name);
   if (!config_file.empty()) tree.applyJson(file_json, config_file);
   for (const auto& s : sets) {

@@ -1,7 +1,8 @@
 // Every parameter of the timing model, typed. The named property tree
 // (oit_rop/config/ConfigTree.hpp: defaults, units, descriptions, presets, JSON files,
 // --set a.b.c=value) reads and writes these fields; the model reads only this.
-// Defaults are the `igpu` preset (../shared/notes/hardware.md).
+// The struct's defaults are a base the presets start from (the old `igpu`
+// values, no L2 or L3); every preset sets its values (Presets.cpp, CONFIG.md).
 #pragma once
 
 #include <cstdint>
@@ -19,6 +20,10 @@ enum class LockMode : uint8_t { Ordered, Unordered, None };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
+// Where a tile's per-pixel arrays live (MEMORY.md): pixel_major = each pixel's
+// array contiguous, pixels in tile order; row_major = row i of every pixel of
+// the tile contiguous (the extra words form one more row).
+enum class ArrayLayoutKind : uint8_t { PixelMajor, RowMajor };
 // The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
 // = a request whose data can go now may pass older ones (MEMORY.md).
 enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
@@ -30,7 +35,7 @@ struct ClockConfig {
 
 struct PartitionConfig {
   unsigned count = 2;         // ROP partitions; the screen is split into interleaved tiles
-  unsigned tile_width = 8;    // pixels; one tile = one blending-array cache line
+  unsigned tile_width = 8;    // pixels; tiles: partition interleave, HiZ, tile locks, resolve
   unsigned tile_height = 8;
   bool operator==(const PartitionConfig&) const = default;
 };
@@ -63,11 +68,31 @@ struct LockConfig {
 };
 
 struct CacheConfig {
-  uint64_t size_bytes = 64 * 1024;   // blending-array tile cache per partition (igpu: 2 x 64 KiB)
+  uint64_t size_bytes = 64 * 1024;   // the ROP's blending-array cache, per partition
   unsigned ways = 8;
   unsigned miss_queue = 16;          // outstanding line fills
   unsigned hit_latency = 10;         // cycles
+  unsigned line_bytes = 64;          // cache line (tag); power of two
+  unsigned sector_bytes = 0;         // fill / write-back unit inside a line (0 = the whole line)
   bool operator==(const CacheConfig&) const = default;
+};
+
+struct MemoryLayoutConfig {
+  ArrayLayoutKind array_layout = ArrayLayoutKind::PixelMajor;
+  bool operator==(const MemoryLayoutConfig&) const = default;
+};
+
+// A shared cache level between the partitions and DRAM (l2; l3 behind it).
+struct SharedCacheConfig {
+  uint64_t size_bytes = 0;        // 0 = no such level
+  unsigned ways = 16;
+  unsigned line_bytes = 64;
+  unsigned sector_bytes = 0;      // 0 = the whole line
+  unsigned slices = 1;            // address-hashed, each with its own port
+  unsigned hit_latency = 50;      // cycles
+  double bytes_per_clock = 64.0;  // per slice
+  bool victim_only = false;       // fills only with the level above's evictions
+  bool operator==(const SharedCacheConfig&) const = default;
 };
 
 struct AluConfig {
@@ -107,6 +132,7 @@ struct DramConfig {
 struct StatsConfig {
   uint64_t interval_cycles = 10000;  // time-series sample period
   uint64_t max_samples = 16384;      // more: the period doubles (pairs of samples merge)
+  bool miss_classes = true;          // classify the ROP cache's misses (compulsory / capacity / conflict)
   bool operator==(const StatsConfig&) const = default;
 };
 
@@ -125,13 +151,15 @@ struct SimConfig {
 };
 
 struct RopConfig {
-  std::string preset = "igpu";
+  std::string preset = "iris-pro-5200";
   ClockConfig clock;
   PartitionConfig partitions;
   InputConfig input;
   EarlyDepthConfig early_depth;
   LockConfig lock;
   CacheConfig cache;
+  MemoryLayoutConfig memory;
+  SharedCacheConfig l2, l3;
   AluConfig alu;
   DramConfig dram;
   StatsConfig stats;

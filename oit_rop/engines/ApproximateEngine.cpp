@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "oit_rop/RopPartition.hpp"
+#include "oit_rop/memory/PortCalendar.hpp"
 
 namespace oit::rop {
 
@@ -38,14 +39,9 @@ void ApproximateEngine::run() {
   // delays the fragments met since the last such span (DelayShares).
   p.root_.account(p.now_);
   DelayShares shares;
+  shares.setBusShare([&p](Cycle from, Cycle to) { return p.memory_.busShare(from, to); });
   Cycle charged = p.now_;  // root causes accounted up to here
   Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
-  // The latest blend that got its slot when it was ready (no queueing): when
-  // it was ready and what delayed it most (a younger blend ready before it
-  // waits behind it in visit order: that wait is this delay's, not the ALU's).
-  Cycle alu_start = 0;
-  RootCause start_cause = RootCause::Alu;
-  bool start_missed = false;
   Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
@@ -57,34 +53,46 @@ void ApproximateEngine::run() {
   }
   constexpr StageStatus kBusy = StageStatus::busy();
   const bool grouped = p.cfg_.lock.per_primitive && p.cfg_.lock.granularity != LockGranularity::Pixel;
-  ReleaseTable locks(p.owned_.size() * p.geo_.lock_per_tile, grouped);
+  // Lock addresses are local tile x addresses per tile + offset, and local
+  // tile numbers run to the largest of the partition's own (not its count:
+  // with tiles_x not a multiple of the partitions, a row holds fewer than
+  // ceil(tiles_x / N) of them). Sized by the count, 3 or 6 partitions wrote
+  // past the table's end.
+  uint32_t local_tiles = 0;
+  for (uint32_t t : p.owned_) local_tiles = std::max(local_tiles, p.geo_.localOf(t) + 1);
+  ReleaseTable locks(size_t(local_tiles) * p.geo_.lock_per_tile, grouped);
   const unsigned cap = p.cfg_.lock.capacity;
   scoreboard_.reset(p.now_);
   waiting_.reset(p.now_);
   // Issue and blend slots in 1/kOne cycles (rates need not be integers).
   const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / p.cfg_.input.fragments_per_clock));
   const double alu_rate = std::max(1e-6, double(p.cfg_.alu.blends_per_clock) * p.s_.format_rate);
-  const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
-  int64_t issue_fx = int64_t(p.now_) << kShift, alu_fx = 0;
+  // Blend slots by time: each fragment takes the earliest slot at or after
+  // the cycle its line is there (the cycle engine's ALU serves fragments in
+  // the order they enter the cache stage, i.e. the order their locks admit
+  // them). Handed out in visit (issue) order, a fragment that waited long for
+  // its lock pushed every younger one's blend behind its own: dgpu, particles
+  // 640x360, mlab k = 2 came out +41.8 % (DESIGN.md).
+  PortCalendar alu_slots(alu_rate, 0);
+  int64_t issue_fx = int64_t(p.now_) << kShift;
   const Cycle tail = p.cfg_.lock.release == LockRelease::EndOfShader ? p.cfg_.lock.shader_tail : 0;
   const Cycle depth_latency = p.cfg_.early_depth.latency, hit_latency = p.cfg_.cache.hit_latency;
   // A culled fragment leaves at early depth when early culling is on: its
   // flag masked by this (one test per visit instead of two).
   const uint8_t leaves_early = p.early_cull_ ? InRec::kCulled : 0;
   // What a fragment that reaches the lock does follows from its kind,
-  // culled x 4 + outcome: its blend latency, whether it writes its line and
-  // whether it appends an A-buffer node. Visits are tallied by kind, and
+  // culled x 4 + outcome: its blend latency, the lines it touches
+  // (FragmentLines) and whether it appends an A-buffer node. Visits are tallied by kind, and
   // the ALU's counts and the skips' follow from the tallies after the phase.
   constexpr unsigned kKinds = 8;
   static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
   std::array<Cycle, kKinds> blend_latency{};
-  std::array<uint8_t, kKinds> writes{}, appends{};
+  std::array<uint8_t, kKinds> appends{};
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
     const unsigned outcome = k & 3;
     blend_latency[k] = p.alu_.latencyOf(culled ? 0u : p.rows_of_[outcome]);
-    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
     appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
   }
   ShaderInput::Draw latency = p.shader_.draw(p.pass_);
@@ -123,7 +131,7 @@ void ApproximateEngine::run() {
     __builtin_prefetch(&in.at(2 * kLookahead));
     const InRec& ahead = in.at(kLookahead);
     locks.prefetch(ahead.lock);
-    p.cache_.prefetch(ahead.tile);
+    p.cache_.prefetch(p.tileOf(ahead.pixel));
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();
@@ -186,6 +194,7 @@ void ApproximateEngine::run() {
     }
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
+    alu_slots.retireBefore(issue);  // no blend of this or a later fragment starts before its issue
 
     const Cycle finish = issue + latency(r.seq);
     last_finish = std::max(last_finish, finish);
@@ -198,12 +207,9 @@ void ApproximateEngine::run() {
     Cycle early = passed;
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
-      early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+      early = std::max(early, p.early_.depthTileReady(issue, p.tileOf(r.pixel)) + (finish - issue));
       if (early > passed) shares.addLike(early - passed, issue, issue + (early - finish), p.last_depth_);
     }
-    Cycle main_delay = early - passed;  // the fragment's largest delay and its cause (head-of-line below)
-    RootCause main_cause = RootCause::DramBandwidth;
-    bool main_missed = false;
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
     Cycle release = early;  // culled early: the entry frees when the fragment leaves early depth
@@ -219,16 +225,14 @@ void ApproximateEngine::run() {
         enter = free;
         waiting_.push(enter);
         shares.add(RootCause::LockWait, free - early);
-        if (free - early > main_delay) {
-          main_delay = free - early;
-          main_cause = RootCause::LockWait;
-        }
         // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
         tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
       const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
       ++visits[kind];
-      const bool write = writes[kind];
+      // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
+      const uint32_t tile = p.tileOf(r.pixel);
+      const std::span<const LineTouch> lines = p.linesOf(r.pixel, uint8_t(kind));
       const Cycle lock_enter = enter;
       // Into the cache the next cycle when admitted on arrival, in the release's
       // own cycle when admitted at one (the cycle engine's stage order).
@@ -240,13 +244,15 @@ void ApproximateEngine::run() {
       Cycle at_cache = issue;
       bool missed;
       p.memory_.resetProbe();
-      Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
-      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
+      uint64_t misses = p.cache_.stats().misses;
+      Cycle got = p.cache_.touch(at_cache, tile, lines, missed);
+      while (got == kNever) [[unlikely]] {  // the miss queue lacks entries: retry when enough free
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
         p.memory_.resetProbe();
-        got = p.cache_.touch(at_cache, r.tile, write, missed);
+        misses = p.cache_.stats().misses;
+        got = p.cache_.touch(at_cache, tile, lines, missed);
       }
       // Waiting for a miss-queue entry: the misses in flight, as the latest one.
       if (at_cache > issue) shares.addLike(at_cache - issue, miss_from, miss_to, p.last_miss_);
@@ -254,42 +260,29 @@ void ApproximateEngine::run() {
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
-        fill_ready[r.tile] = ready;
-        p.last_miss_ = splitWait(at_cache, got, p.memory_.probe());
+        fill_ready[tile] = ready;
+        p.last_miss_ = p.cache_.stats().misses != misses ? splitWait(at_cache, got, p.memory_.probe(), p.miss_rest_)
+                                                         : WaitSplit{at_cache, at_cache, at_cache, RootCause::RopCacheMiss};
         miss_from = at_cache;
         miss_to = got;
         shares.addWait(at_cache, got, p.last_miss_);
       } else if (got > at_cache + hit_latency) {
         const Cycle before = ready;
-        ready = std::max(ready, fill_ready[r.tile]);
+        ready = std::max(ready, fill_ready[tile]);
         shares.addLike(ready - before, miss_from, miss_to, p.last_miss_);
       }
-      if (ready - (enter + hit_latency) > main_delay) main_missed = true;
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
       tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
       const bool miss = ready > enter + hit_latency;
       tl[3].addLeavingGap(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
-      const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
-      alu_fx = slot + alu_step;
-      const Cycle at = Cycle(slot >> kShift);
+      Cycle at, slot_end;
+      alu_slots.book(ready, 1, at, slot_end);
       if (at > ready) {
-        // Slots go in visit order: the part of the wait before the run's first
-        // blend was ready is head-of-line blocking behind it (its delay's
-        // cause, as the cycle engine's in-order cache queue charges the head's
-        // miss); the rest is the ALU's rate.
-        const Cycle hol = alu_start > ready ? std::min(at, alu_start) - ready : 0;
-        if (start_missed) shares.addLike(hol, miss_from, miss_to, p.last_miss_);
-        else if (start_cause == RootCause::DramBandwidth) shares.addLike(hol, issue, issue, p.last_depth_);
-        else shares.add(start_cause, hol);
-        shares.add(RootCause::Alu, at - ready - hol);
+        shares.add(RootCause::Alu, at - ready);
         // Blends queue for the ALU's rate over [alu_run_from, alu_run_to): extend the run or start one.
-        if (std::max(ready, alu_start) > alu_run_to) alu_run_from = std::max(ready, alu_start);
-        alu_run_to = at;
-      } else {
-        alu_start = ready;
-        start_missed = main_missed;
-        start_cause = main_delay ? main_cause : RootCause::Alu;
+        if (ready > alu_run_to) alu_run_from = ready;
+        alu_run_to = std::max(alu_run_to, at);
       }
       if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
       const Cycle done = at + blend_latency[kind];

@@ -35,7 +35,7 @@ bool CycleEngine::step() {
     if constexpr (Deferred) {
       if (!(k.flags & InRec::kCulled)) p.rmw_->complete(t);  // none: the write lands
     }
-    p.releaseLine(k.tile);  // the blend wrote the line: it may be evicted now
+    p.releaseLines(k.pixel, k.outcome);  // the blend wrote its lines: they may be evicted now
     if (!p.s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
       p.nodeWrite();
     if (p.cfg_.lock.release == LockRelease::EndOfShader)
@@ -77,19 +77,19 @@ bool CycleEngine::step() {
     RopPartition::TokenInfo& k = p.tok_[t];
     if constexpr (Deferred) {
       // The insert, when the fragment first reaches the cache port. (A refused
-      // access retries with the outcome it has: its tile is not resident, so no
-      // fragment in flight can write its pixel meanwhile.)
+      // access retries with the outcome it has: its lines are not resident, so
+      // no fragment in flight can write its pixel meanwhile.)
       if (k.flags & InRec::kDeferredInsert) {
-        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, k.tile);
+        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, p.tileOf(k.pixel));
         k.outcome = uint8_t(o);
         k.rows = p.rows_of_[size_t(o)];
         k.flags &= uint8_t(~InRec::kDeferredInsert);
         p.res_.merges_skipped += unsigned((o == model::InsertOutcome::Stored) & p.merge_skip_);
       }
     }
-    const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
     Cycle r = 0;
-    if (!p.acquireGated(now, k.tile, write, r)) {
+    if (!p.acquireGated(now, k.pixel, k.outcome, r)) {
       refused = true;
       break;
     }
@@ -114,7 +114,7 @@ bool CycleEngine::step() {
   unsigned shaded = 0;
   p.shader_.finished(now, [&](uint32_t t) {
     ++shaded;
-    p.early_.push(now, t, p.tok_[t].tile, (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
+    p.early_.push(now, t, p.tileOf(p.tok_[t].pixel), (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
   });
 
   // Issue from the routed input into the shader (needs a scoreboard entry).
@@ -162,7 +162,7 @@ bool CycleEngine::step() {
     } else {
       p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
     }
-    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, rows};
+    p.tok_[t] = RopPartition::TokenInfo{r.pixel, r.flags, r.outcome, rows};
     p.shader_.issue(now, t, r.seq, p.pass_);
     q.pop();
     p.front_.popped(p.id_);

@@ -171,6 +171,31 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   return completion;
 }
 
+void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
+  // Split at block boundaries (a long run spans several).
+  constexpr unsigned shift = kTickShift + kBusyBlockShift;
+  for (uint64_t at = from_tick, end = from_tick + len; at < end;) {
+    const uint64_t block = at >> shift, block_end = (block + 1) << shift;
+    const uint64_t part = std::min(end, block_end) - at;
+    if (block >= busy_blocks_.size()) busy_blocks_.resize(std::max<size_t>(block + 1, busy_blocks_.size() * 2), 0);
+    busy_blocks_[block] += part;
+    at += part;
+  }
+}
+
+double MemorySystem::busShare(Cycle from, Cycle to) const {
+  if (to <= from) return 0.0;
+  // Whole blocks overlapping the span, weighted by the overlap.
+  const uint64_t block_cycles = uint64_t(1) << kBusyBlockShift;
+  double busy = 0.0;
+  for (Cycle b = from >> kBusyBlockShift; b <= (to - 1) >> kBusyBlockShift; ++b) {
+    const Cycle lo = std::max<Cycle>(from, b << kBusyBlockShift), hi = std::min<Cycle>(to, (b + 1) << kBusyBlockShift);
+    const double ticks = b < busy_blocks_.size() ? double(busy_blocks_[b]) : 0.0;
+    busy += ticks / double(uint64_t(1) << kTickShift) * double(hi - lo) / double(block_cycles);
+  }
+  return std::min(1.0, busy / (double(to - from) * double(channels_.size())));
+}
+
 Cycle MemorySystem::transferCycles(uint64_t bursts) const {
   return bursts > 1 ? DramTimings::ceilCycles((bursts - 1) * t_.burst) : 0;
 }
@@ -350,6 +375,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
     bank.act_ready = std::max(bank.last_end, act + tras) + trp;
   }
   c.busy += len;
+  addBusy(xfer, len);
   stats_.channel_busy[ch] = DramTimings::ceilCycles(c.busy);
   return end;
 }

@@ -76,6 +76,13 @@ class MemorySystem {
   void resetProbe() { probe_ = DramProbe{}; }
   const DramProbe& probe() const { return probe_; }
   Cycle unloadedCycles(bool write) const;
+  // The share of the channels' data-bus time busy over [from, to) (0 to 1),
+  // from a record of the bus time booked per block of kBusyBlock cycles: the
+  // part of a wait's unloaded access during which the buses moved other data
+  // is bandwidth, not latency (RootCause.hpp). Bookings still to come for the
+  // span (a partition a quantum behind) are not in it yet.
+  double busShare(Cycle from, Cycle to) const;
+  static constexpr unsigned kBusyBlockShift = 8;  // 256 cycles
   Cycle transferCycles(uint64_t bursts) const;  // bursts - 1 beyond the first, rounded up
 
   // Added accessors (derived timing, for tests, reports and callers that
@@ -154,6 +161,8 @@ class MemorySystem {
   uint64_t window_ = 0;  // DramBusGaps::Asker::window: queue_depth with FR-FCFS, 0 with FCFS
   MemoryStats stats_;
   DramProbe probe_;
+  std::vector<uint64_t> busy_blocks_;  // bus ticks booked per 2^kBusyBlockShift cycles, all channels
+  void addBusy(uint64_t from_tick, uint64_t len);
 };
 
 }  // namespace oit::rop

@@ -215,11 +215,18 @@ def lock_figure(points, scene, configs):
     """Lock waiters and scoreboard occupancy over time for the point of each
     configuration with the most lock-wait cycles."""
     confs = [c for c in configs.all_labels(points) if c != configs.FUNCTIONAL]
-    fig, axes = plt.subplots(1, len(confs), figsize=(15, 4.0), squeeze=False)
-    for ax, conf in zip(axes[0], confs):
+    worst_of = {}
+    for conf in confs:
         pts = [p for p in points if configs.label(p) == conf]
         worst = max(pts, key=lambda p: data.num(p["metrics"], "lock.wait_cycles") or 0)
-        series = load_timeseries(worst)
+        worst_of[conf] = (worst, load_timeseries(worst))
+    if all(len(series) < 3 for _, series in worst_of.values()):
+        # No machine has a series to draw: a note, not a figure of empty panels.
+        return (f"<p class='note'>{esc(scene)}: the lock over time is not drawn: every machine's frame is "
+                f"shorter than three time-series intervals (stats.interval_cycles).</p>")
+    fig, axes = plt.subplots(1, len(confs), figsize=(15, 4.0), squeeze=False)
+    for ax, conf in zip(axes[0], confs):
+        worst, series = worst_of[conf]
         mhz = data.num(worst["metrics"], "timing.clock_mhz") or 1.0
         if len(series) < 3:
             empty_panel(ax, f"{conf}: {data.algo_label(worst)}: the frame is shorter than three time-series\n"

@@ -51,7 +51,7 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
        "lock.mode=unordered needs the timing model (its image follows the order the timing run lets fragments "
        "into the lock); --mode functional inserts in submission order, which is lock.mode=ordered"},
       {"--set sim.engine=approximate --set lock.mode=none",
-       "invalid configuration (preset igpu): lock.mode=none is not modelled by sim.engine=approximate (it visits "
+       "invalid configuration (preset iris-pro-5200): lock.mode=none is not modelled by sim.engine=approximate (it visits "
        "fragments in submission order, so it cannot apply inserts in lock-entry order or race them); use "
        "sim.engine=cycle or lock.mode=ordered"},
   };

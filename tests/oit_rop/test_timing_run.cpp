@@ -185,8 +185,10 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
   };
   // (rate 0.02: early depth's leave is rate-limited past a head's depth read, so
   // the head's status turns from depth wait to busy before it can leave.)
-  for (const auto& [parts, miss_queue, rate] : {std::tuple{1u, 16u, 0.5}, std::tuple{1u, 1u, 0.5},
-                                                std::tuple{2u, 16u, 0.5}, std::tuple{2u, 1u, 0.5},
+  // (A two-entry miss queue is the smallest an fp32 mlab insert can use with
+  // 64-byte lines: an 80-byte array spans two lines.)
+  for (const auto& [parts, miss_queue, rate] : {std::tuple{1u, 16u, 0.5}, std::tuple{1u, 2u, 0.5},
+                                                std::tuple{2u, 16u, 0.5}, std::tuple{2u, 2u, 0.5},
                                                 std::tuple{2u, 16u, 0.02}}) {
     {
       SCOPED_TRACE(std::to_string(parts) + " partitions, miss queue " + std::to_string(miss_queue) + ", rate " +
@@ -203,7 +205,7 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
       EXPECT_EQ(withoutSkipCounts(a.stats), withoutSkipCounts(b.stats));
       EXPECT_GT(a.stats["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
       EXPECT_EQ(b.stats["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
-      if (miss_queue == 1) {
+      if (miss_queue == 2) {
         EXPECT_GT(a.stats["cache"]["miss_queue_full"].get<uint64_t>(), 0u);
         // One refusal per access that waited: never more than the misses.
         EXPECT_LE(a.stats["cache"]["miss_queue_full"].get<uint64_t>(), a.stats["cache"]["misses"].get<uint64_t>());
@@ -414,12 +416,13 @@ TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   EXPECT_EQ(off.stats["skips"]["early_depth_culled"].get<uint64_t>(), 0u);
   EXPECT_EQ(off.stats["skips"]["late_culled"].get<uint64_t>(), 256u);
   EXPECT_TRUE(sameBits(on.image, off.image));
-  // Without fast clear every tile's arrays are written at frame start.
-  const uint64_t line = on.stats["cache"]["line_bytes"];
-  EXPECT_GE(off.stats["memory"]["dram_write_bytes"]["blend_arrays"].get<uint64_t>(), 64 * line);
-  // ... so the frame touched all 64 tiles' arrays (it counted only the 4 a blend wrote).
-  EXPECT_EQ(on.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 4 * line);
-  EXPECT_EQ(off.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 64 * line);
+  // Without fast clear every tile's arrays (64 px x 80 B: 5120 B, 80 lines) are written at frame start.
+  const uint64_t tile = on.stats["cache"]["tile_stride_bytes"];
+  ASSERT_EQ(tile, 5120u);
+  EXPECT_GE(off.stats["memory"]["dram_write_bytes"]["blend_arrays"].get<uint64_t>(), 64 * tile);
+  // ... so the frame touched all 64 tiles' arrays (it counted only the 4 a blend wrote: their 256 pixels' 80 B).
+  EXPECT_EQ(on.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 256u * 80);
+  EXPECT_EQ(off.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 64 * tile);
   EXPECT_EQ(on.stats["memory"]["dram_write_bytes"]["resolve"].get<uint64_t>(), 4u * 64 * 4);
 }
 
@@ -435,13 +438,17 @@ TEST(TimingRun, SecondRunInOneProcessIsRefused) {
 
 }  // namespace
 
-// A 128 KiB, 8-way cache "fits" a 64x64 frame only if a tile line is 2 KiB
-// (64 px x 32 B: mlab k=4 rgba8t8z32): then a raster-order pass misses each of
-// the 64 tiles once and the resolve hits. With fp32 rows (20 B) a line is
-// 5 KiB, only 24 lines (3 sets x 8 ways) fit: the pass still misses 64 times
-// (8 tiles live at a time), but the resolve, walking the 64 tiles in order
-// through 24 lines (LRU), misses all 64 again: 128 misses, from the line size,
-// not from the set index.
+// A 128 KiB, 8-way cache of 64-byte lines (2048 lines, 256 sets) holds a
+// 64x64 frame's arrays exactly with mlab k=4 rgba8t8z32 (64 tiles x 64 px x
+// 32 B = 2048 lines; set = (tile x 32 + line) mod 256: 8 lines per set). One
+// fragment per pixel in raster order: two pixels share a line, so each line
+// misses once (its first pixel) and hits once: 4096 accesses, 2048 misses;
+// the resolve reads the 2048 written lines and hits them all. With fp32 rows
+// (80 B per pixel) a tile is 80 lines (5120 lines in all) and a pixel's array
+// spans two lines: per row of 8 pixels of a tile, 16 line accesses to 10 lines
+// (10 misses, 6 hits): 8192 accesses, 5120 misses; the resolve then walks the
+// tiles in order through 2048 lines and misses all 5120 again (LRU: the first
+// tiles' lines left first).
 TEST(TimingRun, ExactlyFittingCacheMissesEachTileOnce) {
   std::vector<Fragment> fs;
   for (uint16_t y = 0; y < 64; ++y)
@@ -457,10 +464,11 @@ TEST(TimingRun, ExactlyFittingCacheMissesEachTileOnce) {
     const auto r = runInChild([&] { return timed("mlab", p, fs, 64, 64, cfg); });
     ASSERT_TRUE(r.ok) << r.error;
     const bool rgba8 = format == model::StorageFormat::Rgba8T8Z32;
-    EXPECT_EQ(r.stats["cache"]["line_bytes"].get<uint64_t>(), rgba8 ? 2048u : 5120u);
+    EXPECT_EQ(r.stats["cache"]["line_bytes"].get<uint64_t>(), 64u);
+    EXPECT_EQ(r.stats["cache"]["tile_stride_bytes"].get<uint64_t>(), rgba8 ? 2048u : 5120u);
     EXPECT_EQ(r.stats["skips"]["tiles_resolved"].get<uint64_t>(), 64u);
-    EXPECT_EQ(r.stats["cache"]["accesses"].get<uint64_t>(), 64u * 64 + 64);  // fragments + resolve
-    EXPECT_EQ(r.stats["cache"]["misses"].get<uint64_t>(), rgba8 ? 64u : 128u);
+    EXPECT_EQ(r.stats["cache"]["accesses"].get<uint64_t>(), rgba8 ? 4096u + 2048 : 8192u + 5120);  // fragments + resolve
+    EXPECT_EQ(r.stats["cache"]["misses"].get<uint64_t>(), rgba8 ? 2048u : 5120u + 5120);
   }
 }
 
@@ -477,8 +485,9 @@ TEST(TimingRun, CacheNeverHasMoreFillsInFlightThanLines) {
                                        0.1f, 0.4f, model::testutil::kTranspDraw, uint32_t(i)));
   RopConfig cfg = smallConfig();
   cfg.partitions.count = 1;
-  cfg.cache.size_bytes = 1024;  // 2 lines of 512 B (8x8 px x 8 B, k = 1)
+  cfg.cache.size_bytes = 1024;  // 2 lines of 512 B (8x8 px x 8 B, k = 1: a tile per line)
   cfg.cache.ways = 2;
+  cfg.cache.line_bytes = 512;
   cfg.input.latency_model = LatencyModel::Fixed;
   model::AlgorithmParams p;
   p.layers = 1;
@@ -520,10 +529,11 @@ TEST(TimingRun, CacheSetsAreIndexedByThePartitionsOwnTileNumbers) {
                                          model::testutil::kTranspDraw, prim++));
   RopConfig cfg = smallConfig();
   cfg.partitions.count = 2;
-  cfg.cache.size_bytes = 16 * 2048;  // 16 lines of 2 KiB (8x8 px x 4 rows x 8 B): 2 sets of 8 ways
+  cfg.cache.size_bytes = 16 * 1024;  // 16 lines of 1 KiB, a tile each (8x8 px x 2 rows x 8 B): 2 sets of 8 ways
   cfg.cache.ways = 8;
+  cfg.cache.line_bytes = 1024;
   model::AlgorithmParams p;
-  p.layers = 4;
+  p.layers = 2;
   p.format = model::StorageFormat::Rgba8T8Z32;
   const auto r = runInChild([&] { return timed("mlab", p, fs, 17 * 8, 8, cfg); });
   ASSERT_TRUE(r.ok) << r.error;

@@ -70,6 +70,9 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("early_depth"), fieldCount<EarlyDepthConfig>());
   EXPECT_EQ(propertiesUnder("lock"), fieldCount<LockConfig>());
   EXPECT_EQ(propertiesUnder("cache"), fieldCount<CacheConfig>());
+  EXPECT_EQ(propertiesUnder("memory"), fieldCount<MemoryLayoutConfig>());
+  EXPECT_EQ(propertiesUnder("l2"), fieldCount<SharedCacheConfig>());
+  EXPECT_EQ(propertiesUnder("l3"), fieldCount<SharedCacheConfig>());
   EXPECT_EQ(propertiesUnder("alu"), fieldCount<AluConfig>());
   EXPECT_EQ(propertiesUnder("dram"), fieldCount<DramConfig>());
   EXPECT_EQ(propertiesUnder("stats"), fieldCount<StatsConfig>());
@@ -77,7 +80,7 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
   EXPECT_EQ(fieldCount<DramConfig>(), 23u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 59u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 79u);  // 52 + 20 (issue 21's levels) + 7 (its DRAM controller)
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -164,45 +167,75 @@ TEST(ConfigTree, DramControllerSettingsAreValidated) {
   EXPECT_EQ(e, "dram.scheduler: 'fifo' is not a known value; expected one of fcfs | frfcfs");
 }
 
-TEST(ConfigTree, PresetNames) {
-  EXPECT_EQ(presetNames(), (std::vector<std::string>{"igpu", "dgpu"}));
+TEST(ConfigTree, PresetNamesAndAliases) {
+  EXPECT_EQ(presetNames(), (std::vector<std::string>{"iris-pro-5200", "titan-x-maxwell", "navi21"}));
+  EXPECT_EQ(canonicalPresetName("igpu"), "iris-pro-5200");
+  EXPECT_EQ(canonicalPresetName("dgpu"), "titan-x-maxwell");
+  EXPECT_EQ(canonicalPresetName("navi21"), "navi21");
   const std::string e = errorOf([] { ConfigTree::forPreset("apu"); });
   EXPECT_NE(e.find("unknown preset 'apu'"), std::string::npos) << e;
-  EXPECT_NE(e.find("igpu, dgpu"), std::string::npos) << e;
+  EXPECT_NE(e.find("iris-pro-5200, titan-x-maxwell, navi21"), std::string::npos) << e;
+  EXPECT_NE(e.find("igpu = iris-pro-5200"), std::string::npos) << e;
+  // An alias is the preset it names, under the preset's own name.
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config(), ConfigTree::forPreset("iris-pro-5200").config());
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config(), ConfigTree::forPreset("titan-x-maxwell").config());
+  EXPECT_EQ(ConfigTree::forPreset("igpu").preset(), "iris-pro-5200");
+  // A file written for an alias loads under the preset (and the other way round).
+  TempFile f("alias.json", R"({"preset": "igpu", "lock": {"capacity": 64}})");
+  EXPECT_EQ(resolveConfig("iris-pro-5200", f.path(), {}).lock.capacity, 64u);
+  EXPECT_EQ(resolveConfig("", f.path(), {}).preset, "iris-pro-5200");
 }
 
-TEST(ConfigTree, IgpuPreset) {
-  const ConfigTree t = ConfigTree::forPreset("igpu");
+TEST(ConfigTree, IrisPro5200Preset) {
+  const ConfigTree t = ConfigTree::forPreset("iris-pro-5200");
   const RopConfig& c = t.config();
-  EXPECT_EQ(c, RopConfig{});  // RopConfig's defaults are the igpu preset
-  EXPECT_EQ(c.preset, "igpu");
+  EXPECT_EQ(c.preset, "iris-pro-5200");
   EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1150.0);
-  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 25.6);
-  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 4u);  // 4 px/clk in total
-  EXPECT_EQ(c.cache.size_bytes, 64u * 1024);                   // 2 x 64 KiB over 2 partitions
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 25.6);  // dual-channel DDR3-1600
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 4u);     // 4 px/clk in total
+  EXPECT_EQ(c.cache.size_bytes, 64u * 1024);                      // 2 x 64 KiB over 2 partitions
+  EXPECT_EQ(c.cache.line_bytes, 64u);
+  EXPECT_EQ(c.l2.size_bytes, 6u << 20);     // the 6 MB LLC
+  EXPECT_EQ(c.l3.size_bytes, 128u << 20);   // the 128 MB eDRAM
+  EXPECT_TRUE(c.l3.victim_only);            // filled with the LLC's evictions
   EXPECT_EQ(c.dram.cl, 11u);
   EXPECT_EQ(c.dram.trcd, 11u);
   EXPECT_EQ(c.dram.trp, 11u);
   EXPECT_DOUBLE_EQ(c.dram.tck_ns, 1.25);
   EXPECT_EQ(c.dram.banks, 8u);
+  // Apart from its caches it is the struct's base.
+  RopConfig base;
+  base.l2 = c.l2;
+  base.l3 = c.l3;
+  EXPECT_EQ(c, base);
   EXPECT_NO_THROW(t.validate());
 }
 
-TEST(ConfigTree, DgpuPreset) {
-  const ConfigTree t = ConfigTree::forPreset("dgpu");
+TEST(ConfigTree, TitanXMaxwellPreset) {
+  const ConfigTree t = ConfigTree::forPreset("titan-x-maxwell");
   const RopConfig& c = t.config();
-  EXPECT_EQ(c.preset, "dgpu");
-  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1216.0);
-  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 224.0);
-  EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 56.0);
-  EXPECT_EQ(c.partitions.count, 4u);
-  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 64u);
+  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1075.0);
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 336.0);  // 384-bit GDDR5 at 7 Gbps
+  EXPECT_EQ(c.partitions.count, 6u);                               // six memory controllers
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 96u);     // 96 ROPs
+  EXPECT_EQ(c.l2.size_bytes, 3u << 20);
+  EXPECT_EQ(c.l2.slices, 6u);
+  EXPECT_EQ(c.l3.size_bytes, 0u);
   EXPECT_EQ(c.dram.cl, 24u);
-  EXPECT_EQ(c.dram.trcd, 24u);
-  EXPECT_EQ(c.dram.trp, 24u);
   EXPECT_DOUBLE_EQ(c.dram.tck_ns, 0.667);
   EXPECT_EQ(c.dram.banks, 16u);
-  EXPECT_EQ(c.cache.size_bytes, 512u * 1024);
+  EXPECT_NO_THROW(t.validate());
+}
+
+TEST(ConfigTree, Navi21Preset) {
+  const ConfigTree t = ConfigTree::forPreset("navi21");
+  const RopConfig& c = t.config();
+  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 2015.0);
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 512.0);  // 256-bit GDDR6 at 16 Gbps
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 128u);    // 128 ROPs
+  EXPECT_EQ(c.l2.size_bytes, 4u << 20);
+  EXPECT_EQ(c.l3.size_bytes, 128u << 20);  // Infinity Cache
+  EXPECT_FALSE(c.l3.victim_only);
   EXPECT_NO_THROW(t.validate());
 }
 
@@ -277,7 +310,7 @@ TEST(ConfigTree, ApproximateEngineRefusesLockModesItDoesNotModel) {
     t.set("sim.engine", "approximate");
     t.set("lock.mode", mode);
     EXPECT_EQ(errorOf([&] { t.validate(); }),
-              std::string("invalid configuration (preset igpu): lock.mode=") + mode +
+              std::string("invalid configuration (preset iris-pro-5200): lock.mode=") + mode +
                   " is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
                   "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or "
                   "lock.mode=ordered");
@@ -386,7 +419,7 @@ TEST(ConfigTree, CrossFieldValidation) {
   ConfigTree c = ConfigTree::forPreset("igpu");
   c.set("cache.size_bytes", "3000");
   e = errorOf([&] { c.validate(); });
-  EXPECT_NE(e.find("cache.size_bytes (3000) is not a multiple of cache.ways x tile pixels x 4 bytes"),
+  EXPECT_NE(e.find("cache.size_bytes (3000) is not a multiple of cache.ways x cache.line_bytes (8 x 64 = 512)"),
             std::string::npos)
       << e;
 
@@ -507,16 +540,16 @@ TEST(ConfigTree, JsonRepeatedKeyInOneObjectIsAnError) {
 
 TEST(ConfigTree, PrecedencePresetFileSet) {
   TempFile f("prec.json", R"({"dram": {"channels": 3, "banks": 4}, "clock.core_mhz": 900})");
-  // dgpu preset: 4 channels, 16 banks, 1216 MHz; file: 3 channels, 4 banks, 900 MHz; set: 5 channels.
+  // dgpu (titan-x-maxwell) preset: 6 channels, 16 banks, 1075 MHz; file: 3 channels, 4 banks, 900 MHz; set: 5 channels.
   const RopConfig c = resolveConfig("dgpu", f.path(), {"dram.channels=5"});
   EXPECT_EQ(c.dram.channels, 5u);                // --set beats the file
   EXPECT_EQ(c.dram.banks, 4u);                   // the file beats the preset
   EXPECT_DOUBLE_EQ(c.clock.core_mhz, 900.0);     // the file beats the preset
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 56.0);   // the preset where nobody overrides
-  EXPECT_EQ(c.preset, "dgpu");
+  EXPECT_EQ(c.preset, "titan-x-maxwell");
   // Later --set wins over an earlier one.
   EXPECT_EQ(resolveConfig("igpu", "", {"dram.channels=2", "dram.channels=7"}).dram.channels, 7u);
-  EXPECT_EQ(resolveConfig("", "", {}), RopConfig{});  // igpu by default
+  EXPECT_EQ(resolveConfig("", "", {}), presetConfig("iris-pro-5200"));  // the default preset
 }
 
 TEST(ConfigTree, ResolveErrors) {
@@ -561,7 +594,7 @@ TEST(ConfigTree, DescribeListsEveryProperty) {
   t.set("lock.granularity", "quad");
   const std::string d = t.describe();
   for (const auto& p : t.properties()) EXPECT_NE(d.find(p.path + " "), std::string::npos) << p.path;
-  EXPECT_NE(d.find("preset dgpu"), std::string::npos);
+  EXPECT_NE(d.find("preset titan-x-maxwell"), std::string::npos);
   // The changed row shows the preset's value as the default; unchanged rows do not.
   const size_t row = d.find("lock.granularity");
   const std::string line = d.substr(row, d.find('\n', row) - row);
@@ -572,11 +605,11 @@ TEST(ConfigTree, DescribeListsEveryProperty) {
   EXPECT_EQ(d[d.rfind('\n', mhz) + 1], ' ');
 }
 
-TEST(ConfigTree, MarkdownTableHasBothPresets) {
+TEST(ConfigTree, MarkdownTableHasEveryPreset) {
   const std::string md = presetTableMarkdown();
-  EXPECT_NE(md.find("| property | unit | igpu | dgpu |"), std::string::npos);
-  EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| `cache.hit_latency` | cycles | 10 (i) | 80 (i) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| property | unit | iris-pro-5200 | titan-x-maxwell | navi21 |"), std::string::npos);
+  EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 | 32 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `l2.size_bytes` | bytes | 6291456 | 3145728 | 4194304 (i) |"), std::string::npos) << md;
   EXPECT_NE(md.find("pixel \\| quad \\| tile"), std::string::npos) << md;  // pipes escaped in cells
   // Every row has the header's 6 cells: no unescaped '|' inside a value or description.
   size_t rows = 0;
@@ -587,7 +620,7 @@ TEST(ConfigTree, MarkdownTableHasBothPresets) {
     if (line.empty()) continue;
     size_t pipes = 0;
     for (size_t k = 0; k < line.size(); ++k) pipes += line[k] == '|' && (k == 0 || line[k - 1] != '\\');
-    EXPECT_EQ(pipes, 7u) << line;
+    EXPECT_EQ(pipes, 8u) << line;
     ++rows;
   }
   EXPECT_EQ(rows, 2u + ConfigTree::forPreset("igpu").properties().size());
@@ -631,4 +664,47 @@ TEST(ConfigTree, PartitionResumeOffsetsFitInHalfACycle) {
                    "not fit in half a 100.0 ps cycle"),
             std::string::npos)
       << e;
+}
+
+// The memory hierarchy's rules: one line naming the parameter and the rule each.
+TEST(ConfigTree, CacheLinesAndSharedLevelsAreValidated) {
+  const auto problem = [](std::vector<std::string> sets) {
+    return errorOf([&] { resolveConfig("iris-pro-5200", "", sets); });
+  };
+  EXPECT_NE(problem({"cache.size_bytes=1024", "cache.ways=1", "cache.line_bytes=2048"}).find("cache.line_bytes"),
+            std::string::npos);  // out of range (at most 1024) already
+  // (A ROP-cache line never exceeds the cache: lines are at most 1 KiB, caches at least 1 KiB.)
+  std::string e = problem({"cache.line_bytes=128", "cache.sector_bytes=48"});
+  EXPECT_NE(e.find("cache.sector_bytes (48) must be a power of two dividing cache.line_bytes (128)"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=64", "cache.sector_bytes=128"});
+  EXPECT_NE(e.find("cache.sector_bytes (128) must be a power of two dividing cache.line_bytes (64)"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=1024", "cache.sector_bytes=16"});
+  EXPECT_NE(e.find("cache.line_bytes (1024) holds 64 sectors of cache.sector_bytes (16); at most 32"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=128"});  // the LLC's lines are 64 bytes
+  EXPECT_NE(e.find("l2.line_bytes (64) is smaller than cache.line_bytes (128): a line of the level above must fit in "
+                   "one l2 line"),
+            std::string::npos) << e;
+  e = problem({"l2.line_bytes=128"});  // the eDRAM's lines are 64 bytes
+  EXPECT_NE(e.find("l3.line_bytes (64) is smaller than l2.line_bytes (128)"), std::string::npos) << e;
+  e = problem({"l2.size_bytes=0"});
+  EXPECT_NE(e.find("l3.size_bytes is set but l2.size_bytes is 0"), std::string::npos) << e;
+  e = problem({"l2.size_bytes=5000000"});
+  EXPECT_NE(e.find("l2.size_bytes (5000000) is not a multiple of l2.slices x l2.ways x l2.line_bytes (4 x 12 x 64 = "
+                   "3072)"),
+            std::string::npos) << e;
+  e = problem({"l2.size_bytes=1024", "l2.ways=1", "l2.slices=1", "l2.line_bytes=4096"});
+  EXPECT_NE(e.find("l2.line_bytes (4096) is larger than the cache, l2.size_bytes (1024)"), std::string::npos) << e;
+  e = problem({"l3.sector_bytes=24"});
+  EXPECT_NE(e.find("l3.sector_bytes (24) must be a power of two dividing l3.line_bytes (64)"), std::string::npos)
+      << e;
+  // One violation is one line; several are listed one line each.
+  e = problem({"l2.size_bytes=0"});
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  e = problem({"cache.sector_bytes=48", "l2.size_bytes=0"});
+  EXPECT_NE(e.find(":\n  cache.sector_bytes (48)"), std::string::npos) << e;
+  EXPECT_NE(e.find("\n  l3.size_bytes is set"), std::string::npos) << e;
+  EXPECT_NO_THROW(resolveConfig("iris-pro-5200", "", {"l3.size_bytes=0", "l2.size_bytes=0"}));
 }

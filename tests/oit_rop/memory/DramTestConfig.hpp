@@ -5,6 +5,7 @@
 #pragma once
 
 #include "oit_rop/Types.hpp"
+#include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/config/RopConfig.hpp"
 
 namespace oit::rop::testutil {
@@ -27,6 +28,17 @@ inline DramConfig roundDramConfig(unsigned channels) {
   return c;
 }
 inline constexpr double kRoundMhz = 1000.0;
+
+// The dgpu preset the controller tests were derived on (before issue 21 made
+// `dgpu` an alias of titan-x-maxwell): titan-x-maxwell's GDDR5 controller
+// (the same timings, refresh, write queue and scheduler) on four channels at
+// 1216 MHz.
+inline RopConfig gddr5FourChannels() {
+  RopConfig c = presetConfig("titan-x-maxwell");
+  c.dram.channels = 4;
+  c.clock.core_mhz = 1216.0;
+  return c;
+}
 inline constexpr Cycle kCtrl = 40, kCl = 11, kTrcd = 11, kTrp = 11, kBurst = 4;
 
 }  // namespace oit::rop::testutil

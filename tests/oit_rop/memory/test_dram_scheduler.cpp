@@ -21,6 +21,7 @@ namespace {
 using testutil::kBurst;
 using testutil::kCl;
 using testutil::kCtrl;
+using testutil::gddr5FourChannels;
 using testutil::kRoundMhz;
 using testutil::kTrcd;
 using testutil::kTrp;
@@ -145,7 +146,7 @@ TEST(DramScheduler, ClosedLoopOfReadsWithRowMisses) {
   // 19.47, burst 1.39 cycles; a miss bank's last activate is over tRAS ago.
   // 64 reads in flight: latency bound 45,656 cycles, FCFS N / W x miss =
   // 54,416 (48.8 % of the bus busy), FR-FCFS 57.8 %.
-  RopConfig d = presetConfig("dgpu");
+  RopConfig d = gddr5FourChannels();  // the dgpu of these figures
   d.dram.channels = 1;
   d.dram.trefi_ns = d.dram.trfc_ns = 0;
   d.dram.bank_hash = false;
@@ -177,7 +178,7 @@ TEST(DramScheduler, ClosedLoopOfReadsWithRowMisses) {
 //   (100 batches with reads after them), then 40 bursts at the drain after
 //   the last read: end = first + 16 N b + 101 r2w + 100 w2r = 9,702: 69.9 %.
 TEST(DramScheduler, MixedReadWriteLinesOnTheDgpuChannels) {
-  RopConfig d = presetConfig("dgpu");
+  RopConfig d = gddr5FourChannels();  // the dgpu of these figures
   d.dram.trefi_ns = d.dram.trfc_ns = 0;
   d.dram.bank_hash = false;
   constexpr unsigned kLines = 305;
