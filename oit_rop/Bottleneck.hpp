@@ -29,6 +29,9 @@ struct ResourceWork {
   double cache_accesses = 0, cache_ports = 0;          // ROP-cache accesses; accesses per clock
   double alu_work = 0, alu_rate = 0;                   // blends + resolved pixels; per clock (format rate in)
   double dram_busy_cycles = 0, dram_channels = 0;      // data-bus cycles over all channels
+  // Shared levels (absent: per_clock 0): bytes through their slices' ports
+  // (requested reads and writes, victims in) and what the ports move per clock.
+  double l2_bytes = 0, l2_per_clock = 0, l3_bytes = 0, l3_per_clock = 0;
 };
 
 // timing.root_cause_cycles, .bound_by, .utilization and .phase_cycles for a

@@ -415,6 +415,17 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   work.alu_rate = double(cfg.alu.blends_per_clock) * setup.format_rate;
   for (Cycle b : ms.channel_busy) work.dram_busy_cycles += double(b);
   work.dram_channels = double(ms.channel_busy.size());
+  auto port_bytes = [](const LevelStats& s) {
+    return double(LevelStats::total(s.read_bytes) + LevelStats::total(s.write_bytes));
+  };
+  if (top->l2()) {
+    work.l2_bytes = port_bytes(top->l2()->stats());
+    work.l2_per_clock = cfg.l2.bytes_per_clock * cfg.l2.slices;
+  }
+  if (top->l3()) {
+    work.l3_bytes = port_bytes(top->l3()->stats());
+    work.l3_per_clock = cfg.l3.bytes_per_clock * cfg.l3.slices;
+  }
   timing.update(bottleneckJson(phases, cycles, work));
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
