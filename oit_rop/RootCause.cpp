@@ -21,7 +21,7 @@ const char* rootCauseKey(RootCause c) {
     case RootCause::DramLatency: return "dram_latency";
     case RootCause::DramBandwidth: return "dram_bandwidth";
     case RootCause::PipelineLatency: return "pipeline_latency";
-    case RootCause::Atomics: return "atomics";
+    case RootCause::Atomics: return "atomic_wait";
     case RootCause::ListWalk: return "list_walk";
     case RootCause::Sort: return "sort";
   }

@@ -28,7 +28,7 @@ enum class RootCause : uint8_t {
   DramLatency,      // DRAM's unloaded access (controller, activate, CL, the bursts on an idle channel)
   DramBandwidth,    // DRAM queueing: the wait beyond the unloaded access (busy bus, banks, write queue)
   PipelineLatency,  // a pass's tail: fragments in fixed latencies with nothing behind them to overlap
-  Atomics,          // the A-buffer's global node counter (issue 22, items 1-3)
+  Atomics,          // "atomic_wait": the A-buffer's global node counter (issue 22, items 1-3; the stall cause's name)
   ListWalk,         // the A-buffer resolve's dependent node reads
   Sort,             // the A-buffer resolve's sort
 };
