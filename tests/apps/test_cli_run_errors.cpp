@@ -379,6 +379,18 @@ TEST_F(CliRunErrors, BadHierarchyIsOneLineNamingTheParameter) {
   EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): cache.sector_bytes (48) must be a "
                       "power of two dividing cache.line_bytes (64)\n");
   EXPECT_FALSE(fs::exists(out));
+  // The DRAM controller's rules too (the write queue's watermarks out of order).
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --set dram.write_low=60");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): dram.write_low (60) >= "
+                      "dram.write_high (56): the low watermark must be below the high one\n");
+  EXPECT_FALSE(fs::exists(out));
+  // An l2 line smaller than the ROP cache's, on another preset.
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --preset titan-x-maxwell --set l2.line_bytes=64");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset titan-x-maxwell): l2.line_bytes (64) is smaller "
+                      "than cache.line_bytes (128): a line of the level above must fit in one l2 line\n");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Monotonicity (issue 21, "What must hold"): every resource knob one step
 // worse (fewer partitions, smaller caches, fewer ways, lower bandwidth,
-// longer latencies, coarser lock, end-of-shader release, smaller queues) on
+// longer latencies, coarser lock, end-of-shader release, smaller queues; the
+// DRAM controller's turnarounds, refresh, write queue and scheduler too) on
 // three scenes; no frame may get faster by more than 0.5 % (a smaller
 // scoreboard only by cutting the ROP cache's thrashing, below). The base is
 // iris-pro-5200 with its caches scaled to the scenes (an 8 KiB ROP cache, a
@@ -112,6 +113,13 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"dram.tras", "40"},
       {"dram.banks", "4"},
       {"dram.controller_ns", "80"},
+      {"dram.twtr", "12"},
+      {"dram.trtw", "6"},
+      {"dram.trefi_ns", "3900"},
+      {"dram.trfc_ns", "350"},
+      {"dram.write_queue", "60"},
+      {"dram.queue_depth", "8"},
+      {"dram.scheduler", "fcfs"},
   };
   return v;
 }
