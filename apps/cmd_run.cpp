@@ -11,8 +11,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/Commands.hpp"
 #include "apps/OutputFiles.hpp"
@@ -114,9 +118,33 @@ uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
 // Cycles, frame time, stalls by cause, DRAM bytes and footprint side by side.
 void printTimingSummary(const nlohmann::json& j) {
   const auto& t = j["timing"];
-  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), {} idle cycles skipped\n",
+  // The first line answers "what bounds this frame?" and where its time went.
+  const auto& ph = t["phase_cycles"];
+  std::string passes;
+  for (const auto& c : ph["transparent"]) passes += (passes.empty() ? "" : " + ") + std::to_string(c.get<uint64_t>());
+  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), bound by {} ({:.1f} % of partition-cycles); "
+             "phases: opaque {}, transparent {}, resolve {} cycles; {} idle cycles skipped\n",
              t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
-             t["partitions"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+             t["partitions"].get<uint64_t>(), t["bound_by"]["resource"].get<std::string>(),
+             100.0 * t["bound_by"]["share"].get<double>(), ph["opaque"].get<uint64_t>(), passes.empty() ? "0" : passes,
+             ph["resolve"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+  // Root causes in descending order (those above 0.05 %), utilisation per resource.
+  std::vector<std::pair<uint64_t, std::string>> causes;
+  uint64_t charged = 0;
+  for (auto it = t["root_cause_cycles"].begin(); it != t["root_cause_cycles"].end(); ++it) {
+    causes.push_back({it.value().get<uint64_t>(), it.key()});
+    charged += causes.back().first;
+  }
+  std::stable_sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string root;
+  for (const auto& [c, k] : causes)
+    if (charged && double(c) / double(charged) >= 0.0005)
+      root += fmt::format("{}{} {:.1f} %", root.empty() ? "" : ", ", k, 100.0 * double(c) / double(charged));
+  fmt::print("root causes {}\n", root.empty() ? "none" : root);
+  std::string util;
+  for (auto it = t["utilization"].begin(); it != t["utilization"].end(); ++it)
+    util += fmt::format("{}{} {:.1f} %", util.empty() ? "" : ", ", it.key(), 100.0 * it.value().get<double>());
+  fmt::print("utilisation {}\n", util);
   fmt::print("stalls      {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "stage", "busy", "lock wait",
              "sb full", "miss wait", "dram bw", "alu busy", "starved");
   for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {

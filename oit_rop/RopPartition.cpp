@@ -46,6 +46,8 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   tile_mask_ = (1u << geo_.tile_shift) - 1;
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
+  miss_rest_ = cfg_.l2.size_bytes || cfg_.l3.size_bytes ? RootCause::L2 : RootCause::RopCacheMiss;
+  root_.setBusShare([&memory](Cycle from, Cycle to) { return memory.busShare(from, to); });
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
@@ -79,9 +81,11 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   payload_.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
   const sc_core::sc_time at = clock_.time(now), stamp = sc_core::sc_time_stamp();
   sc_core::sc_time delay = at > stamp ? at - stamp : sc_core::SC_ZERO_TIME;
+  memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
   if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
 
@@ -131,6 +135,7 @@ void RopPartition::opaquePhase() {
   // where an opaque fragment landed are written once, spread over the phase.
   const Cycle start = now_;
   const Cycle cycles = Cycle(std::ceil(double(n) / cfg_.input.fragments_per_clock));
+  root_.set(now_, RootCause::Input);  // the pre-pass at the input rate
   std::vector<uint32_t> landed;
   for (uint32_t t : owned_)
     if (front_.opaqueLanded()[t] != 0) landed.push_back(t);
@@ -250,6 +255,7 @@ void RopPartition::resolvePhase() {
   std::vector<LineTouch> lines;
   size_t line_next = 0;
   Cycle lines_ready = 0;
+  WaitSplit lines_wait;  // the wait of the tile's line that is ready last (root causes)
   bool issuing = false;
   std::vector<LineTouch> issuing_pins, computing_pins;
   std::deque<std::vector<LineTouch>> pf_pins;
@@ -278,6 +284,7 @@ void RopPartition::resolvePhase() {
         resolveLines(t, lines);
         line_next = 0;
         lines_ready = now;
+        lines_wait = WaitSplit{now, now, now, RootCause::RopCacheMiss};
         issuing = true;
       }
       if (now < retry_at_) {
@@ -286,6 +293,8 @@ void RopPartition::resolvePhase() {
       }
       while (line_next < lines.size()) {
         const std::span<const LineTouch> line(&lines[line_next], 1);
+        memory_.resetProbe();
+        const uint64_t misses = cache_.stats().misses;
         const Cycle r = cache_.acquire(now, t, line);
         if (r == kNever) {
           if (!cache_.refusedBySet()) {
@@ -302,7 +311,14 @@ void RopPartition::resolvePhase() {
           break;
         }
         issuing_pins.push_back(lines[line_next]);
-        lines_ready = std::max(lines_ready, r);
+        if (r > lines_ready) {
+          lines_ready = r;
+          // A miss: its memory; a hit under a fill in flight: the latest miss's.
+          lines_wait = cache_.stats().misses != misses ? splitWait(now, r, memory_.probe(), miss_rest_)
+                       : r > now + cfg_.cache.hit_latency ? last_miss_
+                                                           : WaitSplit{now, now, now, RootCause::RopCacheMiss};
+          if (cache_.stats().misses != misses) last_miss_ = lines_wait;
+        }
         ++line_next;
       }
       if (refused) break;
@@ -314,16 +330,28 @@ void RopPartition::resolvePhase() {
       // (where an opaque fragment landed) and, for the A-buffer, its node
       // lists (every node of the tile read once).
       Cycle data = lines_ready;
+      // The wait's root causes follow the input that arrives last.
+      WaitSplit wait = lines_wait;
+      auto input = [&](Cycle ready) {
+        if (ready > data) {
+          data = ready;
+          wait = splitWait(now, ready, memory_.probe(), miss_rest_);
+        }
+      };
       if (front_.opaqueLanded()[t] != 0)
-        data = std::max(data, access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes,
-                                     false, Surface::Colour));
+        input(access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour));
       Cycle sort = 0;
       if (!s_.bounded && front_.tileNodes()[t] != 0) {
+        // The list walk's reads depend on each other: the chain, not a
+        // resource, holds the tile (root cause list_walk).
         const ListWalk w = walkLists(t, data);
-        data = w.ready;
+        if (w.ready > data) {
+          wait = splitWait(now, w.ready, DramProbe{}, RootCause::ListWalk);
+          data = w.ready;
+        }
         sort = w.sort_cycles;
       }
-      pf.push({t, data, sort});
+      pf.push({t, data, sort, wait});
       ++next_issue;
       ++acquired;
       moved = true;
@@ -349,9 +377,20 @@ void RopPartition::resolvePhase() {
       }
     }
     if (!computing && pf.empty() && next_issue == tiles.size()) break;
-    if (computing) setStatus(Stage::Resolve, now < sort_done ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
-    else if (window_blocked) setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-    else setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
+    // Root causes: the A-buffer's per-pixel sort, then the resolve's compute
+    // at the blend rate; a tile's inputs wait for memory (or its list walk);
+    // a refused acquire for the latest miss.
+    if (computing) {
+      const bool sorting = now < sort_done;
+      setStatus(Stage::Resolve, sorting ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
+      root_.set(now, sorting ? RootCause::Sort : RootCause::Alu);
+    } else if (window_blocked) {
+      setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+      root_.set(now, RootCause::DramBandwidth);
+    } else {
+      setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
+      root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
+    }
     Cycle next = now + 1;
     if (!moved && cfg_.skip.idle_cycles) {
       next = kNever;
@@ -367,6 +406,7 @@ void RopPartition::resolvePhase() {
   // The frame ends when the last posted write reached DRAM: the DRAM
   // controller writes what its write queues still hold (MEMORY.md).
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+  root_.set(now_, RootCause::DramBandwidth);  // the posted writes still queued
   const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
@@ -408,6 +448,8 @@ void RopPartition::run() {
     cycle_->run();
   resolvePhase();
   flushAccounts();
+  root_.account(now_);
+  res_.root_causes = root_.cycles();
   res_.end = now_;
   // Bring SystemC time up to the partition's end (it may run up to a quantum
   // ahead): the sampler samples while any partition runs, so without this the

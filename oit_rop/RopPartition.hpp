@@ -30,6 +30,7 @@
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/stages/PixelLock.hpp"
 #include "oit_rop/stages/ShaderInput.hpp"
+#include "oit_rop/RootCause.hpp"
 #include "oit_rop/TimingStats.hpp"
 
 namespace oit::rop {
@@ -72,6 +73,7 @@ struct PartitionResult {
   // them (the dependent reads' latency), sort cycles summed over pixels.
   uint64_t list_nodes_walked = 0, list_walk_cycles = 0, sort_cycles = 0;
   uint64_t merges_skipped = 0;   // Stored inserts that did not pay the merge (lazy)
+  RootCauseAccount::Cycles root_causes{};  // every cycle up to `end` by root cause (RootCause.hpp)
 };
 
 class RopPartition : public sc_core::sc_module, public MemoryPort {
@@ -121,11 +123,13 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     uint32_t token;
     Cycle ready;  // its line is there
     bool miss;
+    WaitSplit wait;  // a miss: its wait by root cause
   };
   struct ResolveEntry {
     uint32_t tile;
     Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there
     Cycle sort;   // A-buffer: the tile's slowest per-pixel sort, cycles
+    WaitSplit wait;  // what the tile's inputs waited for (root causes)
   };
   struct ListWalk {
     Cycle ready = 0;        // the last node of the tile's longest list is read
@@ -199,8 +203,16 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     // A set with every way in use is retried after the release that frees one
     // of its lines (releaseLine), also independent of how often we ask.
     if (now < retry_at_) return false;
+    memory_.resetProbe();
+    const uint64_t misses = cache_.stats().misses;
     ready = cache_.acquire(now, tileOf(pixel), linesOf(pixel, kind));
-    if (ready != kNever) return true;
+    if (ready != kNever) {
+      // A miss waits for memory (a fast-clear fill for the cache alone); a
+      // hit under a fill in flight for that fill, which the partition's
+      // latest miss stands for.
+      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
+      return true;
+    }
     retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
     return false;
   }
@@ -244,6 +256,10 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::array<Cycle, kStageCount> since_{};  // cycle the current status_[i] began
   uint64_t codes_ = 0;                      // status_ packed, byte i = code(status_[i])
   bool starving_ = false;
+  RootCauseAccount root_;     // this partition's cycles by root cause
+  WaitSplit last_miss_;       // the latest blend-array miss's wait (root causes)
+  WaitSplit last_depth_;      // the latest depth-tile read's wait
+  RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;

@@ -9,10 +9,12 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 #include <stdexcept>
 #include <tlm>
 #include <unordered_map>
 
+#include "oit_rop/Bottleneck.hpp"
 #include "oit_rop/memory/ArrayLayout.hpp"
 #include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/stages/BlendAlu.hpp"
@@ -265,6 +267,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   EarlyDepthStats depth{};
   AluStats alu{};
   std::vector<uint64_t> part_frags;
+  std::vector<PartitionPhases> phases;
   uint64_t lost_updates = 0;
   for (unsigned i = 0; i < n; ++i) {
     const RopPartition& p = top->partition(i);
@@ -288,6 +291,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                      {"fragments", r.fragments}, {"stages", stages},
                      {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lockStats().peak_occupancy}});
     part_frags.push_back(r.fragments);
+    phases.push_back({r.opaque_end, r.end, r.pass_end, r.root_causes});
     skipped += r.skipped_idle;
     culled_early += r.culled_early;
     culled_late += r.culled_late;
@@ -406,6 +410,32 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     for (size_t i = sampled; i < bus.size(); ++i) rest += bus[i];
     series.push_back({{"cycle", cycles}, {"dram_bytes", rest}, {"scoreboard_occupancy", 0}, {"lock_waiters", 0}});
   }
+  // What bounds the frame: root causes, utilisation per resource, phases.
+  ResourceWork work;
+  work.input_fragments = double(rc.opaque) + double(std::accumulate(part_frags.begin(), part_frags.end(), uint64_t(0)));
+  work.input_rate = cfg.input.fragments_per_clock;
+  work.depth_tests = double(depth.tested);
+  for (size_t i = 0; i < sampled; ++i) work.mean_occupancy += double(top->samples()[i].occupancy);
+  work.mean_occupancy = sampled ? work.mean_occupancy / double(sampled) : 0.0;
+  work.lock_capacity = cfg.lock.capacity;
+  work.cache_accesses = double(cache.accesses);
+  work.cache_ports = std::max(1.0, std::ceil(double(cfg.alu.blends_per_clock)));
+  work.alu_work = double(alu.blends + alu.dropped) + double(tiles_resolved) * double(geo.tilePixels());
+  work.alu_rate = double(cfg.alu.blends_per_clock) * setup.format_rate;
+  for (Cycle b : ms.channel_busy) work.dram_busy_cycles += double(b);
+  work.dram_channels = double(ms.channel_busy.size());
+  auto port_bytes = [](const LevelStats& s) {
+    return double(LevelStats::total(s.read_bytes) + LevelStats::total(s.write_bytes));
+  };
+  if (top->l2()) {
+    work.l2_bytes = port_bytes(top->l2()->stats());
+    work.l2_per_clock = cfg.l2.bytes_per_clock * cfg.l2.slices;
+  }
+  if (top->l3()) {
+    work.l3_bytes = port_bytes(top->l3()->stats());
+    work.l3_per_clock = cfg.l3.bytes_per_clock * cfg.l3.slices;
+  }
+  timing.update(bottleneckJson(phases, cycles, work));
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
   peak_gbps = std::max(peak_gbps, mean_gbps);

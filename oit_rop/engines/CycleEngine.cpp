@@ -96,7 +96,7 @@ bool CycleEngine::step() {
     }
     p.lock_.enterFront(now);
     const bool miss = r > now + p.cfg_.cache.hit_latency;
-    p.cache_q_.push({t, r, miss});
+    p.cache_q_.push({t, r, miss, miss ? p.last_miss_ : WaitSplit{}});
     ++accepted;
   }
 
@@ -209,6 +209,34 @@ bool CycleEngine::step() {
   // (Resolve stays idle through the transparent phase.)
   const uint64_t codes = uint64_t(c0) | uint64_t(c1) << 8 | uint64_t(c2) << 16 | uint64_t(c3) << 24 | uint64_t(c4) << 32;
   if (codes != (p.codes_ & 0xFFFFFFFFFFull)) p.setStatuses(codes, 5);
+
+  // The cycle's root cause (DESIGN.md "Root causes"): a stage at its full rate
+  // bounds the cycle (the blend ALU first: the sink; the input only when the
+  // scoreboard still has room after its issue: else a faster input could not
+  // have issued more, and what holds the entries bounds it); otherwise follow the
+  // back-pressure to what holds the oldest work: the line the cache's head
+  // waits for, a refused access (the latest miss stands for the memory it
+  // waits on), the ordered lock, a depth tile, then the front end, the
+  // scoreboard, and what is left: fixed latencies with nothing to overlap.
+  if (c4 == stall(Stall::AtomicWait)) {
+    p.root_.set(now, RootCause::Atomics);  // every blend in flight waits for the A-buffer's node counter
+  } else if (alu_blocked | ((to_alu != 0) & (to_alu == alu_slots))) {
+    p.root_.set(now, RootCause::Alu);
+  } else if (issued ? (issued == slots) & !p.lock_.full() : (!sb_full & !p.starving_ & !draining & !q.empty())) {
+    p.root_.set(now, RootCause::Input);
+  } else if (head_waits && p.cache_q_.front().miss) {
+    p.root_.setWait(now, p.cache_q_.front().wait);
+  } else if (refused) {
+    p.root_.setWait(now, p.last_miss_);
+  } else if (p.lock_.waiting()) {
+    p.root_.set(now, RootCause::LockWait);
+  } else if (c1 == stall(Stall::CacheMissWait)) {
+    p.root_.setWait(now, p.last_depth_);
+  } else if (p.starving_) {
+    p.root_.set(now, RootCause::InputStarvation);
+  } else {
+    p.root_.set(now, sb_full ? RootCause::ScoreboardFull : RootCause::PipelineLatency);
+  }
 
   // Next cycle at which any stage can move.
   Cycle next = now + 1;
