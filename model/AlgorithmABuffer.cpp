@@ -43,6 +43,17 @@ class ABuffer final : public OitAlgorithm {
     pool_.clear();
     capacity_ = capacityNodes(budget_, h.width, h.height, poolNodeBytes());
   }
+  // Host memory per stored node (the model keeps fp32 fields whatever the
+  // storage format): oitsim run's memory estimate and the banded reference.
+  uint64_t poolBytesPerFragment() const override { return sizeof(Node); }
+  void reservePool(uint64_t fragments) override {
+    if (fragments > kNil) throw std::length_error("abuffer: node pool exceeds 2^32 - 1 nodes");
+    if (fragments > pool_.capacity()) {
+      pool_ = std::vector<Node>();  // free first: the old nodes need no copy
+      pool_.reserve(size_t(fragments));
+    }
+  }
+
   void clear(uint32_t* w) override { w[0] = kNil; }
 
   InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {

@@ -214,6 +214,14 @@ class OitAlgorithm {
   virtual uint64_t poolCapacityNodes() const { return 0; }
   // A-buffer: what resolve() of this pixel walks and sorts; zero otherwise.
   virtual ResolveWork resolveWork(const uint32_t* words) const { return {}; }
+  // Bytes of the pool per stored fragment (the A-buffer's node), 0 for the
+  // bounded algorithms: the memory estimate and the banded reference use it.
+  virtual uint64_t poolBytesPerFragment() const { return 0; }
+  // Makes room in the pool for this many stored fragments at once, so it does
+  // not grow by doubling (which can take up to three times the nodes' bytes
+  // while it copies). Call it before beginFrame(), which keeps the room (a
+  // larger reservation drops the nodes held). No effect on bounded algorithms.
+  virtual void reservePool(uint64_t fragments) {}
 
  protected:
   void setLayout(StateLayout l) {

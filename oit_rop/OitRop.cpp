@@ -22,11 +22,11 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
   MemoryPort* below = &dram_.entry();
   if (c.l2.size_bytes != 0) {
     if (c.l3.size_bytes != 0) {
-      l3_ = std::make_unique<CacheLevel>("l3", c.l3, lookback, *below);
+      l3_ = std::make_unique<CacheLevel>("l3", c.l3, lookback, *below, nullptr, c.stats.level_miss_classes);
       below = l3_.get();
     }
     l2_ = std::make_unique<CacheLevel>("l2", c.l2, lookback, *below,
-                                       l3_ && c.l3.victim_only ? l3_.get() : nullptr);
+                                       l3_ && c.l3.victim_only ? l3_.get() : nullptr, c.stats.level_miss_classes);
     dram_.setEntry(*l2_);
   }
   const unsigned n = setup.geo->partitions;

@@ -115,7 +115,7 @@ void checkCacheServesInserts(const RopConfig& cfg, const CacheGeometry& g, const
 }
 
 // One cache level's figures for memory.levels[] (report.json).
-json levelJson(const std::string& name, const LevelStats& l) {
+json levelJson(const std::string& name, const LevelStats& l, bool classified) {
   const uint64_t accesses = LevelStats::total(l.accesses), hits = LevelStats::total(l.hits);
   json by = json::object();
   for (unsigned i = 0; i < kSurfaceCount; ++i)
@@ -123,7 +123,7 @@ json levelJson(const std::string& name, const LevelStats& l) {
                                   {"misses", l.misses[i]},           {"read_bytes", l.read_bytes[i]},
                                   {"write_bytes", l.write_bytes[i]}, {"fill_bytes", l.fill_bytes[i]},
                                   {"writeback_bytes", l.writeback_bytes[i]}, {"writebacks", l.writebacks[i]}};
-  return {{"name", name},
+  json j = {{"name", name},
           {"accesses", accesses},
           {"hits", hits},
           {"misses", LevelStats::total(l.misses)},
@@ -134,11 +134,15 @@ json levelJson(const std::string& name, const LevelStats& l) {
           {"writeback_bytes", LevelStats::total(l.writeback_bytes)},
           {"writebacks", LevelStats::total(l.writebacks)},
           {"victims_in", l.victims_in},
-          {"miss_classes", true},
-          {"compulsory_misses", l.compulsory_misses},
-          {"capacity_misses", l.capacity_misses},
-          {"conflict_misses", l.conflict_misses},
+          {"miss_classes", classified},
           {"by_surface", by}};
+  // Not classified (stats.level_miss_classes off): no split at all, not zeros.
+  if (classified) {
+    j["compulsory_misses"] = l.compulsory_misses;
+    j["capacity_misses"] = l.capacity_misses;
+    j["conflict_misses"] = l.conflict_misses;
+  }
+  return j;
 }
 
 // Bytes still dirty somewhere in the hierarchy at the frame's end, per
@@ -506,8 +510,8 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                 {"capacity_misses", cache.capacity_misses},
                 {"conflict_misses", cache.conflict_misses}};
     levels.push_back(rop);
-    if (top->l2()) levels.push_back(levelJson("l2", top->l2()->stats()));
-    if (top->l3()) levels.push_back(levelJson("l3", top->l3()->stats()));
+    if (top->l2()) levels.push_back(levelJson("l2", top->l2()->stats(), top->l2()->classifiesMisses()));
+    if (top->l3()) levels.push_back(levelJson("l3", top->l3()->stats(), top->l3()->classifiesMisses()));
   }
   json memory = {{"dram_read_bytes", bySurface(ms.read_bytes)},
                  {"dram_write_bytes", bySurface(ms.write_bytes)},

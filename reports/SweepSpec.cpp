@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "model/StorageFormat.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
+#include "traces/InputFile.hpp"
 
 namespace oit::sweep {
 
@@ -262,19 +264,22 @@ except (ValueError, TypeError) as e:
 // syntax with nlohmann's line and column, a key repeated within one object (the
 // parsers would keep the last silently; config files refuse it too), and a top
 // level that is not an object.
+// A spec is a few kilobytes; far more is not one (and would be read whole).
+constexpr uint64_t kMaxSpecBytes = uint64_t(16) << 20;
+
 ojson loadSpec(const std::string& path) {
-  if (!fs::exists(path)) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  // A regular file only, opened without blocking (a FIFO would hang).
+  const InputFile in = openInputFile(path);
+  if (!in && in.error == ENOENT) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  if (!in) throw std::invalid_argument("sweep spec " + path + ": " + in.problem);
   const std::string ext = fs::path(path).extension().string();
   const bool yaml = ext == ".yaml" || ext == ".yml";
   std::string text;
   if (yaml) {
     text = yamlToJson(path);
   } else {
-    std::ifstream in(path);
-    if (!in) throw std::invalid_argument("sweep spec " + path + ": cannot open");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    text = ss.str();
+    std::string problem;
+    if (!readAll(in, kMaxSpecBytes, text, problem)) throw std::invalid_argument("sweep spec " + path + ": " + problem);
   }
   // Repeated keys, named by their path (base.mode, traces[1].gen).
   const auto cb = rop::refuseRepeatedKeys<ojson>(

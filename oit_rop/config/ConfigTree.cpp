@@ -4,6 +4,7 @@
 #include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
+#include "traces/InputFile.hpp"
 
 #include <fmt/format.h>
 
@@ -12,7 +13,6 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
@@ -322,7 +322,11 @@ const std::vector<Property>& registry() {
               "(even; an odd value counts as the next lower even one)"),
       boolean("stats.miss_classes", &R::stats, &StatsConfig::miss_classes,
               "classify the ROP cache's misses as compulsory, capacity or conflict (a fully associative shadow "
-              "cache, updated on every line access; the shared levels always classify theirs)"),
+              "cache, updated on every line access; the shared levels': stats.level_miss_classes)"),
+      boolean("stats.level_miss_classes", &R::stats, &StatsConfig::level_miss_classes,
+              "classify the shared levels' (l2, l3) misses as well (a fully associative shadow of each level's "
+              "lines, 2 M for a 128 MB l3: 28 % of the approximate engine's time on the bench trace, "
+              "bench/RESULTS-timing.md; off, their report says miss_classes false and gives no split)"),
 
       boolean("skip.early_depth", &R::skip, &SkipConfig::early_depth,
               "culled fragments skip lock and cache (else they pass through both)"),
@@ -592,12 +596,21 @@ void ConfigTree::applyJson(const nlohmann::json& j, const std::string& origin) {
 
 namespace {
 
+// Far above any real configuration (a few KiB): a larger file is not one.
+constexpr uint64_t kMaxConfigFileBytes = uint64_t{16} << 20;
+
 // Reads a config file (JSON, comments allowed). Every error names the file:
 // syntax errors with nlohmann's line and column, number overflow (1e400) and a
 // key repeated within one object (JSON parsers keep the last silently).
 nlohmann::json readConfigFile(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
+  // A regular file only, opened without blocking (a FIFO would hang, a device
+  // never end, a directory gave "basic_filebuf::underflow error").
+  const InputFile in = openInputFile(file);
+  if (!in && in.error != 0) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
+  if (!in) throw std::invalid_argument(fmt::format("{}: {} (expected a JSON config file)", file, in.problem));
+  std::string text, problem;
+  if (!readAll(in, kMaxConfigFileBytes, text, problem))
+    throw std::invalid_argument(fmt::format("{}: config file {}", file, problem));
   const auto cb = refuseRepeatedKeys<nlohmann::json>(
       [&](const std::string& key) {
         throw std::invalid_argument(fmt::format(
@@ -607,7 +620,7 @@ nlohmann::json readConfigFile(const std::string& file) {
       },
       KeyPath::Slashed);
   try {
-    return nlohmann::json::parse(in, cb, true, /*ignore_comments=*/true);
+    return nlohmann::json::parse(text, cb, true, /*ignore_comments=*/true);
   } catch (const nlohmann::json::exception& e) {  // parse_error (with line, column), out_of_range.406 ...
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
   }
@@ -789,16 +802,25 @@ std::string ConfigTree::describe() const {
 
 ConfigTree resolveTree(const std::string& preset, const std::string& config_file,
                        const std::vector<std::string>& sets) {
-  std::string name = preset;
+  std::string name = preset, preset_from_file;
   nlohmann::json file_json;
   if (!config_file.empty()) {
     file_json = readConfigFile(config_file);
     // A file naming its preset supplies it when --preset was not given.
-    if (name.empty() && file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
-      name = file_json["preset"].get<std::string>();
+    if (file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
+      preset_from_file = file_json["preset"].get<std::string>();
   }
+  const bool from_file = name.empty() && !preset_from_file.empty();
+  if (from_file) name = preset_from_file;
   if (name.empty()) name = "iris-pro-5200";
-  ConfigTree tree = ConfigTree::forPreset(name);
+  ConfigTree tree = [&] {
+    try {
+      return ConfigTree::forPreset(name);
+    } catch (const std::invalid_argument& e) {
+      if (!from_file) throw;
+      throw std::invalid_argument(fmt::format("{}: key 'preset': {}", config_file, e.what()));
+    }
+  }();
   if (!config_file.empty()) tree.applyJson(file_json, config_file);
   for (const auto& s : sets) {
     const size_t eq = s.find('=');

@@ -150,6 +150,7 @@ struct StatsConfig {
   uint64_t interval_cycles = 10000;  // time-series sample period
   uint64_t max_samples = 16384;      // more: the period doubles (pairs of samples merge)
   bool miss_classes = true;          // classify the ROP cache's misses (compulsory / capacity / conflict)
+  bool level_miss_classes = false;   // classify the shared levels' (l2, l3) misses too: a costly shadow per level
   bool operator==(const StatsConfig&) const = default;
 };
 

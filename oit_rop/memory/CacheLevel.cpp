@@ -157,13 +157,12 @@ void MissClassifier::install(uint64_t line, uint32_t sectors) {
 // ---- CacheLevel ---------------------------------------------------------------
 
 CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle lookback, MemoryPort& lower,
-                       CacheLevel* victim_sink)
+                       CacheLevel* victim_sink, bool classify_misses)
     : name_(std::move(name)),
       cfg_(cfg),
       lower_(lower),
       victim_sink_(victim_sink),
-      sector_bytes_(cfg.sector_bytes ? cfg.sector_bytes : cfg.line_bytes),
-      classes_(cfg.line_bytes ? cfg.size_bytes / cfg.line_bytes : 1) {
+      sector_bytes_(cfg.sector_bytes ? cfg.sector_bytes : cfg.line_bytes) {
   if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0 || cfg.slices == 0)
     throw std::invalid_argument(name_ + ": size, line, ways and slices must be > 0");
   if (sector_bytes_ > cfg.line_bytes || cfg.line_bytes % sector_bytes_ != 0 || cfg.line_bytes / sector_bytes_ > 32)
@@ -186,9 +185,21 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle loo
   if (!lines_) throw std::bad_alloc();
   set_used_.assign((size_t(cfg.slices) * sets_ + 63) / 64, 0);
   ports_.assign(cfg.slices, PortCalendar(cfg.bytes_per_clock, lookback));
+  if (classify_misses) classes_ = std::make_unique<MissClassifier>(cfg.size_bytes / cfg.line_bytes);
 }
 
 CacheLevel::~CacheLevel() = default;
+
+uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classify_misses, uint64_t lines_touched) {
+  if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0) return 0;
+  const uint64_t lines = cfg.size_bytes / cfg.line_bytes;
+  const uint64_t sets = lines / cfg.ways;
+  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * sizeof(Line) + lines / 8;
+  // The shadow per line it holds: its key, LRU links and sectors (20 B) and
+  // two hash-table entries at half load (line -> slot, line -> sectors seen).
+  constexpr uint64_t kShadowBytesPerLine = 96;
+  return tags + (classify_misses ? std::min(lines, lines_touched) * kShadowBytesPerLine : 0);
+}
 
 unsigned CacheLevel::sliceOf(uint64_t addr) const { return sliceHash(addr >> line_shift_, cfg_.slices); }
 uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_shift_); }
@@ -273,7 +284,8 @@ Cycle CacheLevel::fetch(Cycle at, uint64_t line, uint32_t mask, Surface s) {
 }
 
 void CacheLevel::classify(uint64_t line, uint32_t sectors, bool missed) {
-  const MissClassifier::Kind k = classes_.access(line, sectors);
+  if (!classes_) return;
+  const MissClassifier::Kind k = classes_->access(line, sectors);
   if (!missed) return;
   switch (k) {
     case MissClassifier::Kind::Compulsory: ++stats_.compulsory_misses; break;
@@ -353,6 +365,16 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
                               uint32_t dirty, Surface s) {
   const unsigned si = unsigned(s);
   ++stats_.victims_in;
+  // The classifier learns each line's sectors once (consecutive installs of
+  // one line are one install: nothing else touches it between them).
+  uint64_t pending_line = 0;
+  uint32_t pending = 0;
+  bool has_pending = false;
+  const auto flush = [&] {
+    if (has_pending) classes_->install(pending_line, pending);
+    pending = 0;
+    has_pending = false;
+  };
   // Each valid sector of the evicted line: a run of bytes, dirty or clean.
   for (uint32_t k = 0; k < 32 && k * sector_bytes < line_bytes; ++k) {
     if (!(valid >> k & 1)) continue;
@@ -379,7 +401,12 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
       l = &allocate(start, set, line);
       l->surface = s;
     }
-    classes_.install(line, whole);
+    if (classes_) {
+      if (has_pending && line != pending_line) flush();
+      pending_line = line;
+      pending |= whole;
+      has_pending = true;
+    }
     l->valid |= whole;
     if (is_dirty) {
       l->dirty |= whole;
@@ -391,6 +418,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     }
     l->stamp = ++stamp_;
   }
+  if (classes_) flush();
 }
 
 void CacheLevel::dirtyRanges(std::vector<DirtyRange>& out) const {

@@ -70,8 +70,11 @@ class CacheLevel final : public MemoryPort {
   // every eviction of this level, clean or dirty; null otherwise (dirty
   // evictions are written to `lower`). `lookback`: how far behind the latest
   // request another may come (callers a quantum apart: PortCalendar).
+  // `classify_misses`: keep LevelStats's 3 C's (a fully associative shadow of
+  // as many lines as the level: stats.level_miss_classes); without it they
+  // stay 0 and nothing else changes.
   CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle lookback, MemoryPort& lower,
-             CacheLevel* victim_sink = nullptr);
+             CacheLevel* victim_sink = nullptr, bool classify_misses = true);
   ~CacheLevel() override;
 
   // Read: the cycle the bytes are there. Write: the cycle the level accepted
@@ -85,9 +88,18 @@ class CacheLevel final : public MemoryPort {
   // Every dirty sector still held (frame end), merged into runs per line.
   void dirtyRanges(std::vector<DirtyRange>& out) const;
 
+  // The host memory a level of configuration `cfg` takes when a frame puts
+  // `lines_touched` distinct lines through it: the pages of its tag store
+  // those lines' sets occupy (sets are taken in address order, so a frame
+  // touches min(sets, lines) of them) and, with `classify_misses`, the
+  // shadow's entries. For oitsim run's memory pre-check (apps/RunMemory),
+  // which checks it against measured peaks.
+  static uint64_t hostBytesEstimate(const SharedCacheConfig& cfg, bool classify_misses, uint64_t lines_touched);
+
   const std::string& name() const { return name_; }
   const SharedCacheConfig& config() const { return cfg_; }
   const LevelStats& stats() const { return stats_; }
+  bool classifiesMisses() const { return classes_ != nullptr; }
   uint32_t sets() const { return sets_; }
   uint32_t lineBytes() const { return cfg_.line_bytes; }
   uint32_t sectorBytes() const { return sector_bytes_; }
@@ -146,7 +158,7 @@ class CacheLevel final : public MemoryPort {
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice
   uint64_t stamp_ = 0;
-  MissClassifier classes_;
+  std::unique_ptr<MissClassifier> classes_;  // null: misses not classified
   LevelStats stats_;
 };
 

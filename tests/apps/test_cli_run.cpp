@@ -140,8 +140,8 @@ TEST_F(CliRun, TimingReportHasEveryFieldAndTheFunctionalImage) {
 
 // Determinism end to end: two separate processes (own heap, own address-space
 // layout) on the same trace and seed write identical images and identical
-// reports apart from the wall-clock fields and the command line (it names the
-// --out folder). A non-default seed and two partitions at a short quantum put
+// reports apart from the wall-clock and memory fields and the command line (it
+// names the --out folder). A non-default seed and two partitions at a short quantum put
 // the seeded shader latency and the partitions' interleaving at DRAM to work.
 TEST_F(CliRun, TwoProcessesGiveIdenticalReportsApartFromWallClock) {
   std::vector<nlohmann::json> reports;
@@ -152,7 +152,7 @@ TEST_F(CliRun, TwoProcessesGiveIdenticalReportsApartFromWallClock) {
                             " --algo mlab --layers 4 --set input.seed=7 --set sim.quantum_cycles=50 -q --out " + out);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     nlohmann::json j = readJson(out + "/report.json");
-    for (const char* k : {"wall_seconds", "fragments_per_second", "reference_wall_seconds"}) {
+    for (const char* k : {"wall_seconds", "fragments_per_second", "reference_wall_seconds", "memory"}) {
       ASSERT_TRUE(j["sim"].contains(k)) << k;  // the fields removed are the ones REPORT.md names
       j["sim"].erase(k);
     }

@@ -135,6 +135,12 @@ TEST_F(CliRunErrors, FunctionalModeRejectsTheSameBadTimingOptions) {
                           ": a VCD needs the timing model; drop --mode functional (the default is timing)\n");
   EXPECT_FALSE(fs::exists(out));
   EXPECT_FALSE(fs::exists(dir_->file("v.vcd")));
+  // An earlier run's VCD at the path goes too, as its other outputs do, even
+  // though this run fails on an option.
+  writeText(dir_->file("old.vcd"), "$date earlier run $end\n");
+  r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --vcd " + dir_->file("old"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_->file("old.vcd")));
 }
 
 // An earlier run's report.json never survives a run that fails, however early

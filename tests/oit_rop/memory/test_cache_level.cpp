@@ -186,6 +186,31 @@ TEST(CacheLevel, MissesAreClassifiedCompulsoryCapacityConflict) {
   EXPECT_EQ(l2.stats().misses[0], 6u);
 }
 
+// stats.level_miss_classes off: the same accesses, hits, misses, bytes and
+// cycles, and no split (all three causes 0, classifiesMisses false).
+TEST(CacheLevel, WithoutClassificationOnlyTheSplitIsMissing) {
+  FakeBelow below_on, below_off;
+  CacheLevel on("l2", small(128, 1), 1000, below_on, nullptr, true);
+  CacheLevel off("l2", small(128, 1), 1000, below_off, nullptr, false);
+  EXPECT_TRUE(on.classifiesMisses());
+  EXPECT_FALSE(off.classifiesMisses());
+  Cycle t = 0;
+  for (uint64_t line : {0, 2, 0, 1, 3, 2, 2}) {  // the sequence above, and a hit
+    t += 200;
+    const bool write = line == 1;
+    EXPECT_EQ(on.access(t, line * 64, 64, write, Surface::BlendArrays),
+              off.access(t, line * 64, 64, write, Surface::BlendArrays));
+  }
+  EXPECT_EQ(on.stats().misses[0], 6u);
+  EXPECT_EQ(off.stats().misses[0], 6u);
+  EXPECT_EQ(off.stats().hits[0], 1u);
+  EXPECT_EQ(on.stats().fill_bytes, off.stats().fill_bytes);
+  EXPECT_EQ(on.stats().writeback_bytes, off.stats().writeback_bytes);
+  EXPECT_EQ(on.stats().compulsory_misses + on.stats().capacity_misses + on.stats().conflict_misses, 6u);
+  EXPECT_EQ(off.stats().compulsory_misses + off.stats().capacity_misses + off.stats().conflict_misses, 0u);
+  EXPECT_EQ(below_on.reqs.size(), below_off.reqs.size());
+}
+
 TEST(CacheLevel, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
   FakeBelow below;
   // Two sets of one way, 64-byte lines of 16-byte sectors: lines 0 and 2 share set 0.
