@@ -15,6 +15,9 @@
 #include <chrono>
 #include <filesystem>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/Commands.hpp"
 #include "apps/OutputFiles.hpp"
@@ -177,9 +180,33 @@ uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
 // Cycles, frame time, stalls by cause, DRAM bytes and footprint side by side.
 void printTimingSummary(const nlohmann::json& j) {
   const auto& t = j["timing"];
-  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), {} idle cycles skipped\n",
+  // The first line answers "what bounds this frame?" and where its time went.
+  const auto& ph = t["phase_cycles"];
+  std::string passes;
+  for (const auto& c : ph["transparent"]) passes += (passes.empty() ? "" : " + ") + std::to_string(c.get<uint64_t>());
+  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), bound by {} ({:.1f} % of partition-cycles); "
+             "phases: opaque {}, transparent {}, resolve {} cycles; {} idle cycles skipped\n",
              t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
-             t["partitions"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+             t["partitions"].get<uint64_t>(), t["bound_by"]["resource"].get<std::string>(),
+             100.0 * t["bound_by"]["share"].get<double>(), ph["opaque"].get<uint64_t>(), passes.empty() ? "0" : passes,
+             ph["resolve"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+  // Root causes in descending order (those above 0.05 %), utilisation per resource.
+  std::vector<std::pair<uint64_t, std::string>> causes;
+  uint64_t charged = 0;
+  for (auto it = t["root_cause_cycles"].begin(); it != t["root_cause_cycles"].end(); ++it) {
+    causes.push_back({it.value().get<uint64_t>(), it.key()});
+    charged += causes.back().first;
+  }
+  std::stable_sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string root;
+  for (const auto& [c, k] : causes)
+    if (charged && double(c) / double(charged) >= 0.0005)
+      root += fmt::format("{}{} {:.1f} %", root.empty() ? "" : ", ", k, 100.0 * double(c) / double(charged));
+  fmt::print("root causes {}\n", root.empty() ? "none" : root);
+  std::string util;
+  for (auto it = t["utilization"].begin(); it != t["utilization"].end(); ++it)
+    util += fmt::format("{}{} {:.1f} %", util.empty() ? "" : ", ", it.key(), 100.0 * it.value().get<double>());
+  fmt::print("utilisation {}\n", util);
   fmt::print("stalls      {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "stage", "busy", "lock wait",
              "sb full", "miss wait", "dram bw", "alu busy", "starved");
   for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {
@@ -190,6 +217,13 @@ void printTimingSummary(const nlohmann::json& j) {
                c["cache_miss_wait"].get<uint64_t>(), c["dram_bandwidth"].get<uint64_t>(),
                c["alu_busy"].get<uint64_t>(), c["input_starved"].get<uint64_t>());
   }
+  // The A-buffer's own waits (stall causes atomic_wait, list_walk, sort), when it had any.
+  const auto& ss = t["stages"];
+  const uint64_t atomic = ss["blend_alu"]["stalls"].value("atomic_wait", uint64_t(0));
+  const uint64_t walk = ss["resolve"]["stalls"].value("list_walk", uint64_t(0));
+  const uint64_t sort = ss["resolve"]["stalls"].value("sort", uint64_t(0));
+  if (atomic + walk + sort != 0)
+    fmt::print("            blend_alu atomic wait {}, resolve list walk {}, sort {} cycles\n", atomic, walk, sort);
   const auto& m = j["memory"];
   fmt::print("dram        read {} (arrays {}, depth {}, colour {}, resolve {}), written {}, peak {:.1f} GB/s, mean {:.1f} GB/s\n",
              humanBytes(double(num(m, "dram_read_bytes", "total"))),
@@ -326,9 +360,15 @@ void runReplay(RunArgs& a) {
     }
   }
 
+  // The A-buffer under test takes its pool and local array from the ROP
+  // configuration in both modes (the exact reference below does not).
+  if (a.algo == "abuffer") a.params.abuffer = rop::abufferBudget(tree.config().abuffer);
   auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
   auto src = openTraceWithSize(a.trace, a.width, a.height);  // header and size are validated here
   const TraceHeader& h = src->header();
+  // A pool that cannot hold the frame's heads: one line naming abuffer.pool_bytes, before any work.
+  const uint64_t pool_nodes =
+      a.algo == "abuffer" ? model::capacityNodes(a.params.abuffer, h.width, h.height, algo->poolNodeBytes()) : 0;
   // The run's peak memory, phase by phase, against the budget: a frame that
   // cannot fit is refused before any work (RunMemory.hpp).
   RunShape shape;
@@ -360,7 +400,10 @@ void runReplay(RunArgs& a) {
   shape.reference = a.reference == "abuffer" ? ReferenceKind::Exact
                     : a.reference == "none"  ? ReferenceKind::None
                                              : ReferenceKind::File;
-  shape.run_is_reference = a.algo == "abuffer";
+  // An abuffer run that is exact itself (fp32 nodes, unlimited pool and
+  // local array) is its own reference; otherwise the exact A-buffer is.
+  shape.run_is_reference =
+      a.algo == "abuffer" && a.params.format == model::StorageFormat::Fp32 && a.params.abuffer.unlimited();
   if (a.seeds_given) {
     shape.seeds = a.seeds;
     shape.seed_processes = std::min(rop::usableCores(), a.seeds);
@@ -369,7 +412,8 @@ void runReplay(RunArgs& a) {
   // counts them, for its reservation and the estimate (the record count would
   // refuse a frame with many opaque ones). The reference's bands need no count
   // here (they count what reaches them); its estimate takes the record count.
-  if (shape.pool_bytes_per_fragment > 0) shape.fragments = transparentFragments(*src);
+  // A preallocated pool holds no more than its nodes (the rest are dropped).
+  if (shape.pool_bytes_per_fragment > 0) shape.fragments = std::min(transparentFragments(*src), pool_nodes);
   const RunMemoryEstimate mem = estimateRunMemory(shape, residentBytes(), budget.bytes);
   checkRunFitsBudget(mem, budget, a.trace, shape, a.algo);
   if (shape.reference == ReferenceKind::File) checkReferenceFile(a.reference, h.width, h.height);
@@ -402,8 +446,10 @@ void runReplay(RunArgs& a) {
   } else {
     run = renderWith(*src, *algo, clear, !a.quiet, a.algo);
   }
-  // The reference: the run itself (abuffer), the exact A-buffer in bands
-  // that fit the memory the rest of the run needs anyway, a file, or none.
+  // The reference is the exact A-buffer (unlimited pool and local array, fp32
+  // nodes) whatever the algorithm under test: the run itself when it is that,
+  // else built in bands that fit the memory the rest of the run needs anyway;
+  // or a file, or none.
   TimedRender ref;
   unsigned ref_bands = 0;
   uint64_t band_file_bytes = 0;
@@ -452,6 +498,16 @@ void runReplay(RunArgs& a) {
                  {"seed", a.params.seed},
                  {"background", a.background},
                  {"ignored_settings", model::ignoredSettings(a.algo)}};
+  if (!algo->bounded()) {
+    const model::ABufferBudget& b = a.params.abuffer;
+    const uint64_t cap = algo->poolCapacityNodes();
+    j["config"]["abuffer"] = {{"pool_bytes", b.pool_bytes},
+                              {"nodes_per_pixel", b.nodes_per_pixel},
+                              {"pool_nodes", cap == UINT64_MAX ? 0 : cap},  // 0: unlimited
+                              {"node_bytes", algo->poolNodeBytes()},
+                              {"max_sorted", b.max_sorted},
+                              {"overflow", b.overflow == model::ABufferOverflow::Truncate ? "truncate" : "spill"}};
+  }
   nlohmann::json passes = nlohmann::json::array();
   for (unsigned p = 0; p < c.pass_outcomes.size(); ++p)
     passes.push_back({{"name", std::string(algo->passName(p))},
@@ -460,6 +516,7 @@ void runReplay(RunArgs& a) {
                       {"discarded", c.pass_outcomes[p][2]}});
   j["fragments"] = {{"in", c.fragments_in},       {"opaque", c.opaque},   {"culled_by_depth", c.culled},
                     {"stored", c.stored},         {"merged", c.merged},   {"discarded", c.discarded},
+                    {"dropped_pool_full", algo->bounded() ? 0 : c.discarded},
                     {"outcomes_sum_to_in", c.balanced()}, {"passes", passes}};
   j["memory"] = {{"bytes_per_pixel", algo->bytesPerPixel()},
                  {"state_bytes", run.result.state_bytes},
@@ -528,9 +585,16 @@ void runReplay(RunArgs& a) {
              timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
-  fmt::print("memory      {} B/pixel, {} of per-pixel state, {} read, {} written\n", algo->bytesPerPixel(),
-             humanBytes(double(run.result.state_bytes)), humanBytes(double(c.bytes_read)),
-             humanBytes(double(c.bytes_written)));
+  // The inserts' read-modify-writes at the ROP, not DRAM traffic (that is the
+  // timing summary's dram line); the A-buffer's pool nodes count at
+  // poolNodeBytes() each, as in the footprint.
+  fmt::print("memory      {} B/pixel, {} of per-pixel state{}; inserts read {} and write {} of it on chip (not DRAM)\n",
+             algo->bytesPerPixel(), humanBytes(double(run.result.state_bytes)),
+             algo->bounded() ? std::string()
+                             : fmt::format(" (heads + pool of {} B nodes)", algo->poolNodeBytes()),
+             humanBytes(double(c.bytes_read)), humanBytes(double(c.bytes_written)));
+  if (!algo->bounded() && c.discarded != 0)
+    fmt::print("            pool full: {} fragments dropped (abuffer.pool_bytes)\n", c.discarded);
   fmt::print("resident    peak {} (estimated {}, budget {}){}\n", humanBytes(double(peak_rss)),
              humanBytes(double(mem.peak())), humanBytes(double(budget.bytes)),
              ref_bands > 1 ? fmt::format("; reference in {} bands ({} band file)", ref_bands,

@@ -55,9 +55,12 @@ class Slab final : public OitAlgorithm {
     w[acc_ + 4] = asWord(1.0f);  // T
   }
 
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;  // skipped before counting, both passes
-    return pass == 0 ? select(w, f) : colour(w, f);
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext& ctx) override {
+    if (noContribution(f)) {  // skipped before counting, both passes
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
+    return pass == 0 ? select(w, f, ctx.work) : colour(w, f, ctx.work);
   }
 
   Rgb resolve(const uint32_t* w, Rgb bg) override {
@@ -117,7 +120,10 @@ class Slab final : public OitAlgorithm {
     return zl < z || (zl == z && seql > seq);
   }
 
-  InsertOutcome select(uint32_t* w, const Fragment& f) {
+  // Work: every stored layer is compared (its coverage in front is summed);
+  // T and the counter are written always, a kept fragment also rewrites the
+  // layers from its position (shifted ones and its own).
+  InsertOutcome select(uint32_t* w, const Fragment& f, InsertWork& work) {
     w[acc_ + 4] = asWord(asFloat(w[acc_ + 4]) * (1.0f - f.a));  // exact total T for the correction
     const uint32_t seq = w[acc_ + 5]++;
     // Layers are sorted by (z, later first); the new one is the latest.
@@ -131,6 +137,7 @@ class Slab final : public OitAlgorithm {
         else keep *= 1.0 - asFloat(w[3 * n + 1]);
       }
     }
+    work = {uint8_t(n), 1};
     if (p == k_) return InsertOutcome::Discarded;  // behind a full list
     uint32_t cov;
     if (mask_) {
@@ -148,6 +155,7 @@ class Slab final : public OitAlgorithm {
       if (!(xi < P)) return InsertOutcome::Discarded;
     }
     const unsigned last = std::min(n, k_ - 1);  // a full list drops its furthest layer
+    work.moves = uint8_t(std::min(255u, 2 + last - p));
     for (unsigned i = last; i > p; --i) {
       w[3 * i] = w[3 * (i - 1)];
       w[3 * i + 1] = w[3 * (i - 1) + 1];
@@ -159,18 +167,20 @@ class Slab final : public OitAlgorithm {
     return n == k_ ? InsertOutcome::Merged : InsertOutcome::Stored;  // Merged: furthest layer evicted
   }
 
-  InsertOutcome colour(uint32_t* w, const Fragment& f) {
+  // Work: the layers compared until the first one not in front, one accumulator written.
+  InsertOutcome colour(uint32_t* w, const Fragment& f, InsertWork& work) {
     const uint32_t seq = w[acc_ + 6]++;
     float vis;
+    unsigned i = 0;
     if (mask_) {
       uint32_t occl = 0;
-      for (unsigned i = 0; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) occl |= w[3 * i + 1];
+      for (; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) occl |= w[3 * i + 1];
       vis = 1.0f - float(std::popcount(occl)) / float(b_);
     } else {
       vis = 1.0f;
-      for (unsigned i = 0; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i)
-        vis *= 1.0f - asFloat(w[3 * i + 1]);
+      for (; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) vis *= 1.0f - asFloat(w[3 * i + 1]);
     }
+    work = {uint8_t(std::min(i + 1, k_)), 1};
     uint32_t* a = w + acc_;
     const float va = vis * f.a;
     a[0] = asWord(asFloat(a[0]) + va * f.r);

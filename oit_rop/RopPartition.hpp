@@ -26,9 +26,11 @@
 #include "oit_rop/memory/BlendArrayCache.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/stages/EarlyDepth.hpp"
+#include "oit_rop/stages/NodeCounter.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/stages/PixelLock.hpp"
 #include "oit_rop/stages/ShaderInput.hpp"
+#include "oit_rop/RootCause.hpp"
 #include "oit_rop/TimingStats.hpp"
 
 namespace oit::rop {
@@ -51,9 +53,11 @@ struct PartitionSetup {
   const ArrayLayout* layout = nullptr;        // where the arrays' bytes are
   const FragmentLines* lines = nullptr;       // the lines each insert touches
   AddressMap map;
-  unsigned array_rows = 0;   // layout rows (for rowsFor)
+  unsigned array_rows = 0;   // layout rows (BlendAlu::chargedWork without lazy merging)
   double format_rate = 1.0;  // BlendAlu throughput factor
   bool bounded = true;       // false: A-buffer node pool traffic
+  unsigned node_bytes = 12;  // A-buffer: one pool node (OitAlgorithm::poolNodeBytes)
+  NodeCounter* counter = nullptr;  // A-buffer: the GPU's node counter (shared by all partitions)
 };
 
 struct PartitionResult {
@@ -65,7 +69,11 @@ struct PartitionResult {
   uint64_t fragments = 0, culled_early = 0, culled_late = 0, blended = 0;
   uint64_t tiles_resolved = 0, tiles_skipped_fast_clear = 0;
   uint64_t node_bytes_written = 0, node_bytes_read = 0;
+  // A-buffer resolve: nodes read by the list walks, cycles tiles waited for
+  // them (the dependent reads' latency), sort cycles summed over pixels.
+  uint64_t list_nodes_walked = 0, list_walk_cycles = 0, sort_cycles = 0;
   uint64_t merges_skipped = 0;   // Stored inserts that did not pay the merge (lazy)
+  RootCauseAccount::Cycles root_causes{};  // every cycle up to `end` by root cause (RootCause.hpp)
 };
 
 class RopPartition : public sc_core::sc_module, public MemoryPort {
@@ -108,17 +116,26 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // and the queues after the lock.
   struct TokenInfo {
     uint32_t pixel;  // in tile order (InRec::pixel)
-    uint8_t flags, outcome, rows;  // outcome: InRec's kind (culled: kCulledKind)
+    uint8_t flags, outcome;  // outcome: InRec's kind (culled: kCulledKind)
+    model::InsertWork work;  // as charged (BlendAlu::chargedWork)
   };
   struct CacheEntry {  // a fragment between lock entry and its blend slot
     uint32_t token;
     Cycle ready;  // its line is there
     bool miss;
+    WaitSplit wait;  // a miss: its wait by root cause
   };
   struct ResolveEntry {
     uint32_t tile;
     Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there
+    Cycle sort;   // A-buffer: the tile's slowest per-pixel sort, cycles
+    WaitSplit wait;  // what the tile's inputs waited for (root causes)
   };
+  struct ListWalk {
+    Cycle ready = 0;        // the last node of the tile's longest list is read
+    Cycle sort_cycles = 0;  // the tile's slowest pixel sort
+  };
+  ListWalk walkLists(uint32_t tile, Cycle heads_ready);
 
   void run();
   // now_ = next, skip count, quantum keeper. Inline (with the helpers below):
@@ -186,8 +203,16 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     // A set with every way in use is retried after the release that frees one
     // of its lines (releaseLine), also independent of how often we ask.
     if (now < retry_at_) return false;
+    memory_.resetProbe();
+    const uint64_t misses = cache_.stats().misses;
     ready = cache_.acquire(now, tileOf(pixel), linesOf(pixel, kind));
-    if (ready != kNever) return true;
+    if (ready != kNever) {
+      // A miss waits for memory (a fast-clear fill for the cache alone); a
+      // hit under a fill in flight for that fill, which the partition's
+      // latest miss stands for.
+      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
+      return true;
+    }
     retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
     return false;
   }
@@ -217,7 +242,13 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   unsigned cache_ports_;              // cache accesses per cycle (ceil(alu.blends_per_clock))
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
-  std::array<uint8_t, 4> rows_of_{};  // BlendAlu::rowsFor by outcome (index 3: invalid, 0 rows)
+  // The work a fragment's blend is charged: its insert's (BlendAlu::chargedWork).
+  model::InsertWork charged(model::InsertWork w, uint8_t outcome) const {
+    return BlendAlu::chargedWork(w, model::InsertOutcome(outcome & 3), s_.array_rows, cfg_.skip.lazy_merge);
+  }
+  // When a blend's work can start: at `now`, or (A-buffer, a stored node) when
+  // the node counter's atomic returns.
+  Cycle blendStart(Cycle now, bool appends) { return appends ? s_.counter->grant(now) : now; }
   unsigned pass_ = 0;
   Cycle now_ = 0, next_sync_ = 0;
   std::vector<uint32_t> owned_;  // tiles of this partition
@@ -225,9 +256,14 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::array<Cycle, kStageCount> since_{};  // cycle the current status_[i] began
   uint64_t codes_ = 0;                      // status_ packed, byte i = code(status_[i])
   bool starving_ = false;
+  RootCauseAccount root_;     // this partition's cycles by root cause
+  WaitSplit last_miss_;       // the latest blend-array miss's wait (root causes)
+  WaitSplit last_depth_;      // the latest depth-tile read's wait
+  RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
+  std::vector<uint32_t> walk_levels_;  // walkLists: pixels of the tile with a list at least i + 1 long
   Cycle last_write_done_ = 0;
   MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;

@@ -9,10 +9,12 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 #include <stdexcept>
 #include <tlm>
 #include <unordered_map>
 
+#include "oit_rop/Bottleneck.hpp"
 #include "oit_rop/memory/ArrayLayout.hpp"
 #include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/stages/BlendAlu.hpp"
@@ -230,6 +232,13 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   setup.array_rows = algo.layout().rows;
   setup.format_rate = BlendAlu::formatRate(cfg.alu, algo.layout());
   setup.bounded = algo.bounded();
+  setup.node_bytes = algo.poolNodeBytes();
+  // The A-buffer's global node counter: one atomic unit for every partition.
+  std::unique_ptr<NodeCounter> counter;
+  if (!algo.bounded()) {
+    counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency);
+    setup.counter = counter.get();
+  }
 
   const CoreClock clock(cfg.clock.core_mhz);
   tlm::tlm_global_quantum::instance().set(clock.time(std::max<uint64_t>(1, cfg.sim.quantum_cycles)));
@@ -262,6 +271,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   EarlyDepthStats depth{};
   AluStats alu{};
   std::vector<uint64_t> part_frags;
+  std::vector<PartitionPhases> phases;
   uint64_t lost_updates = 0;
   for (unsigned i = 0; i < n; ++i) {
     const RopPartition& p = top->partition(i);
@@ -285,6 +295,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                      {"fragments", r.fragments}, {"stages", stages},
                      {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lockStats().peak_occupancy}});
     part_frags.push_back(r.fragments);
+    phases.push_back({r.opaque_end, r.end, r.pass_end, r.root_causes});
     skipped += r.skipped_idle;
     culled_early += r.culled_early;
     culled_late += r.culled_late;
@@ -310,7 +321,8 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     depth.depth_buffer_hits += d.depth_buffer_hits;
     depth.hiz_decided += d.hiz_decided;
     alu.blends += p.alu().stats().blends;
-    alu.rows += p.alu().stats().rows;
+    alu.compares += p.alu().stats().compares;
+    alu.moves += p.alu().stats().moves;
     alu.dropped += p.alu().stats().dropped;
     // lock.mode unordered / none: the outcomes were decided at lock entry.
     if (const BlendArrayRmw* rmw = p.rmw()) {
@@ -356,6 +368,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                     {"blended", rc.stored},
                     {"merged", rc.merged},
                     {"discarded", rc.discarded},
+                    {"dropped_pool_full", algo.bounded() ? 0 : rc.discarded},
                     {"outcomes_sum_to_in", rc.balanced()},
                     {"per_partition", part_frags},
                     {"pass_outcomes", pass_outcomes},
@@ -401,6 +414,32 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     for (size_t i = sampled; i < bus.size(); ++i) rest += bus[i];
     series.push_back({{"cycle", cycles}, {"dram_bytes", rest}, {"scoreboard_occupancy", 0}, {"lock_waiters", 0}});
   }
+  // What bounds the frame: root causes, utilisation per resource, phases.
+  ResourceWork work;
+  work.input_fragments = double(rc.opaque) + double(std::accumulate(part_frags.begin(), part_frags.end(), uint64_t(0)));
+  work.input_rate = cfg.input.fragments_per_clock;
+  work.depth_tests = double(depth.tested);
+  for (size_t i = 0; i < sampled; ++i) work.mean_occupancy += double(top->samples()[i].occupancy);
+  work.mean_occupancy = sampled ? work.mean_occupancy / double(sampled) : 0.0;
+  work.lock_capacity = cfg.lock.capacity;
+  work.cache_accesses = double(cache.accesses);
+  work.cache_ports = std::max(1.0, std::ceil(double(cfg.alu.blends_per_clock)));
+  work.alu_work = double(alu.blends + alu.dropped) + double(tiles_resolved) * double(geo.tilePixels());
+  work.alu_rate = double(cfg.alu.blends_per_clock) * setup.format_rate;
+  for (Cycle b : ms.channel_busy) work.dram_busy_cycles += double(b);
+  work.dram_channels = double(ms.channel_busy.size());
+  auto port_bytes = [](const LevelStats& s) {
+    return double(LevelStats::total(s.read_bytes) + LevelStats::total(s.write_bytes));
+  };
+  if (top->l2()) {
+    work.l2_bytes = port_bytes(top->l2()->stats());
+    work.l2_per_clock = cfg.l2.bytes_per_clock * cfg.l2.slices;
+  }
+  if (top->l3()) {
+    work.l3_bytes = port_bytes(top->l3()->stats());
+    work.l3_per_clock = cfg.l3.bytes_per_clock * cfg.l3.slices;
+  }
+  timing.update(bottleneckJson(phases, cycles, work));
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
   peak_gbps = std::max(peak_gbps, mean_gbps);
@@ -413,12 +452,13 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++landed_resolved;
   }
   const uint64_t wh = uint64_t(h.width) * h.height;
-  const uint64_t nodes = algo.bounded() ? 0 : rc.stored;
+  // A-buffer: heads + the pool as allocated (all of it when preallocated);
+  // its nodes are node_pool_bytes_written, poolNodeBytes() each.
   // The arrays' bytes written: the sectors the inserts wrote, or (no fast
   // clear) every tile's, written clear at frame start; the A-buffer's nodes.
   const uint64_t arrays_touched =
       (cfg.skip.fast_clear ? arrays_written : uint64_t(geo.tiles()) * map.tile_stride) + node_w;
-  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + 12 * nodes},
+  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + algo.poolBytes()},
                     {"depth", 4 * wh},
                     {"colour", 4 * wh},
                     {"resolve", 0}};
@@ -521,7 +561,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"depth_tile_reads", depth.depth_reads},
                  {"depth_buffer_hits", depth.depth_buffer_hits},
                  {"hiz_decided", depth.hiz_decided}};
-  json alu_j = {{"blends", alu.blends}, {"rows", alu.rows}, {"dropped", alu.dropped}};
+  json alu_j = {{"blends", alu.blends}, {"compares", alu.compares}, {"moves", alu.moves}, {"dropped", alu.dropped}};
+  if (counter)
+    alu_j["node_counter"] = {{"atomics", counter->atomics()},
+                             {"wait_cycles", counter->waitCycles()},
+                             {"atomics_per_clock", cfg.abuffer.atomics_per_clock}};
   json per_draw = json::object();
   std::vector<uint32_t> ids;
   for (const auto& [id, _] : front.perDraw()) ids.push_back(id);

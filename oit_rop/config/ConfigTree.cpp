@@ -226,12 +226,44 @@ const std::vector<Property>& registry() {
               "RGBA8-rate blend inserts per clock, per partition"),
       integer("alu.base_latency", &R::alu, &AluConfig::base_latency, 1, 10000, "cycles",
               "latency of one insert"),
-      integer("alu.row_latency", &R::alu, &AluConfig::row_latency, 0, 10000, "cycles",
-              "extra latency per array row read-modify-written"),
+      integer("alu.cycles_per_compare", &R::alu, &AluConfig::cycles_per_compare, 0, 10000, "cycles",
+              "extra latency per row (node, layer, sample) whose depth an insert compares with the fragment's, "
+              "as the functional insert reports it (ALGORITHMS.md, work per insert) [inferred]"),
+      integer("alu.cycles_per_row_moved", &R::alu, &AluConfig::cycles_per_row_moved, 0, 10000, "cycles",
+              "extra latency per row an insert writes: the new row, rows shifted or rescaled behind it, a merged "
+              "row, an accumulator [inferred]"),
       real("alu.fp16_rate", &R::alu, &AluConfig::fp16_rate, 0.001, false, 1, "",
            "fp16-row blend throughput relative to 8-bit rows [inferred]"),
       real("alu.fp32_rate", &R::alu, &AluConfig::fp32_rate, 0.001, false, 1, "",
            "fp32-row blend throughput relative to 8-bit rows [inferred]"),
+
+      integer("abuffer.pool_bytes", &R::abuffer, &ABufferConfig::pool_bytes, 0, std::numeric_limits<uint64_t>::max(),
+              "bytes",
+              "algorithm abuffer: its whole allocation, heads (4 B per pixel) + node pool, whatever the scene; "
+              "fragments past the pool are dropped (fragments.dropped_pool_full); 0 = heads + "
+              "abuffer.nodes_per_pixel nodes per pixel"),
+      real("abuffer.nodes_per_pixel", &R::abuffer, &ABufferConfig::nodes_per_pixel, 0, true, 1e6, "nodes",
+           "algorithm abuffer, abuffer.pool_bytes = 0: pool nodes per pixel of the frame, as applications size "
+           "the pool by the screen [inferred]"),
+      integer("abuffer.max_sorted", &R::abuffer, &ABufferConfig::max_sorted, 1, 1u << 20, "nodes",
+              "algorithm abuffer: the resolve's local array (the shader's register budget): nodes per pixel "
+              "loaded and sorted [inferred]"),
+      enumeration("abuffer.overflow", &R::abuffer, &ABufferConfig::overflow, {"spill", "truncate"},
+                  "algorithm abuffer, a list longer than max_sorted: spill = sort it all (exact image, "
+                  "spill_cycles_per_node per node beyond), truncate = composite the first max_sorted nodes of the "
+                  "list (the newest) only"),
+      real("abuffer.atomics_per_clock", &R::abuffer, &ABufferConfig::atomics_per_clock, 0, true, 1024,
+           "atomics/clock",
+           "algorithm abuffer: increments of the global node counter per clock for the whole GPU, shared by all "
+           "partitions [inferred]"),
+      integer("abuffer.atomic_latency", &R::abuffer, &ABufferConfig::atomic_latency, 0, 100000, "cycles",
+              "algorithm abuffer: one node-counter atomic, issue to returned index [inferred]"),
+      integer("abuffer.sort_cycles_per_compare", &R::abuffer, &ABufferConfig::sort_cycles_per_compare, 0, 10000,
+              "cycles", "algorithm abuffer: resolve's insertion sort, per compare [inferred]"),
+      integer("abuffer.sort_cycles_per_move", &R::abuffer, &ABufferConfig::sort_cycles_per_move, 0, 10000,
+              "cycles", "algorithm abuffer: resolve's insertion sort, per element moved [inferred]"),
+      integer("abuffer.spill_cycles_per_node", &R::abuffer, &ABufferConfig::spill_cycles_per_node, 0, 1000000,
+              "cycles", "algorithm abuffer, overflow = spill: per node beyond max_sorted [inferred]"),
 
       integer("dram.channels", &R::dram, &DramConfig::channels, 1, 64, "", "DRAM channels (shared by all partitions)"),
       real("dram.channel_gbps", &R::dram, &DramConfig::channel_gbps, 0.1, false, 10000, "GB/s",

@@ -142,7 +142,10 @@ struct PresetEntry {
 #define OITSIM_COMMON_ESTIMATES                                                                                  \
   "partitions.tile_width", "partitions.tile_height", "input.latency_min", "input.latency_max",                 \
       "early_depth.latency", "lock.shader_tail", "cache.ways", "cache.miss_queue", "cache.hit_latency",       \
-      "alu.base_latency", "alu.row_latency", "alu.fp16_rate", "alu.fp32_rate", "dram.row_bytes",               \
+      "alu.base_latency", "alu.cycles_per_compare", "alu.cycles_per_row_moved", "alu.fp16_rate",               \
+      "alu.fp32_rate", "abuffer.nodes_per_pixel", "abuffer.max_sorted", "abuffer.atomics_per_clock",                \
+      "abuffer.atomic_latency", "abuffer.sort_cycles_per_compare", "abuffer.sort_cycles_per_move",                  \
+      "abuffer.spill_cycles_per_node", "dram.row_bytes",                                                           \
       "dram.interleave_bytes", "dram.controller_ns", "dram.write_queue", "dram.write_high", "dram.write_low"
 
 const std::vector<PresetEntry>& presets() {

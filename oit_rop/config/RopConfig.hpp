@@ -97,11 +97,28 @@ struct SharedCacheConfig {
 
 struct AluConfig {
   unsigned blends_per_clock = 2;  // RGBA8-rate blends per clock per partition
-  unsigned base_latency = 8;      // cycles of one insert
-  unsigned row_latency = 2;       // extra cycles per row read-modify-written
+  unsigned base_latency = 8;      // cycles of one insert (read, blend, write of one row)
+  unsigned cycles_per_compare = 1;    // per row whose depth the insert compares (model::InsertWork)
+  unsigned cycles_per_row_moved = 2;  // per row the insert writes: new, shifted, rescaled, merged
   double fp16_rate = 0.5;         // throughput relative to 8-bit rows
   double fp32_rate = 0.25;
   bool operator==(const AluConfig&) const = default;
+};
+
+// The A-buffer under test (algorithm abuffer; CONFIG.md): its pool, its
+// resolve's local array, and the global node counter's atomic.
+enum class ABufferOverflowPolicy : uint8_t { Spill, Truncate };
+struct ABufferConfig {
+  uint64_t pool_bytes = 0;           // heads + node pool; 0 = nodes_per_pixel x W x H nodes (+ heads)
+  double nodes_per_pixel = 16.0;     // pool size when pool_bytes = 0 [inferred]
+  unsigned max_sorted = 64;          // resolve's local array (nodes per pixel sorted in registers) [inferred]
+  ABufferOverflowPolicy overflow = ABufferOverflowPolicy::Spill;
+  double atomics_per_clock = 1.0;    // node-counter increments per clock for the whole GPU [inferred]
+  unsigned atomic_latency = 100;     // cycles of one counter atomic at the L2 [inferred]
+  unsigned sort_cycles_per_compare = 1;  // resolve's insertion sort
+  unsigned sort_cycles_per_move = 1;
+  unsigned spill_cycles_per_node = 20;   // a node beyond max_sorted: written out and read back [inferred]
+  bool operator==(const ABufferConfig&) const = default;
 };
 
 struct DramConfig {
@@ -162,6 +179,7 @@ struct RopConfig {
   MemoryLayoutConfig memory;
   SharedCacheConfig l2, l3;
   AluConfig alu;
+  ABufferConfig abuffer;
   DramConfig dram;
   StatsConfig stats;
   SkipConfig skip;

@@ -139,6 +139,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   const uint64_t chunk_bursts = chunk_div.d, row_bursts = row_div.d, channels = channel_div.d;
   const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
   const uint64_t touched_channels = map_.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  uint64_t most_bursts = 0;  // on one channel (the probe's transfer)
   for (uint64_t j = 0; j < touched_channels; ++j) {
     unsigned ch = 0;
     uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
@@ -151,6 +152,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
       lb = channel_div.div<Pow2>(k) * chunk_bursts + chunk_div.mod<Pow2>(b_first);
       hi = channel_div.div<Pow2>(kl) * chunk_bursts + chunk_div.mod<Pow2>(b_last);
     }
+    most_bursts = std::max(most_bursts, hi - lb + 1);
     while (lb <= hi) {
       const uint64_t n = std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
@@ -164,7 +166,44 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   stats_.row_misses = misses_;
   const Cycle completion = DramTimings::ceilCycles(done);
   stats_.last_completion = std::max(stats_.last_completion, completion);
+  if (completion >= probe_.done)
+    probe_ = {completion, unloadedCycles(write), write ? 0 : transferCycles(most_bursts)};
   return completion;
+}
+
+void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
+  // Split at block boundaries (a long run spans several).
+  constexpr unsigned shift = kTickShift + kBusyBlockShift;
+  for (uint64_t at = from_tick, end = from_tick + len; at < end;) {
+    const uint64_t block = at >> shift, block_end = (block + 1) << shift;
+    const uint64_t part = std::min(end, block_end) - at;
+    if (block >= busy_blocks_.size()) busy_blocks_.resize(std::max<size_t>(block + 1, busy_blocks_.size() * 2), 0);
+    busy_blocks_[block] += part;
+    at += part;
+  }
+}
+
+double MemorySystem::busShare(Cycle from, Cycle to) const {
+  if (to <= from) return 0.0;
+  // Whole blocks overlapping the span, weighted by the overlap.
+  const uint64_t block_cycles = uint64_t(1) << kBusyBlockShift;
+  double busy = 0.0;
+  for (Cycle b = from >> kBusyBlockShift; b <= (to - 1) >> kBusyBlockShift; ++b) {
+    const Cycle lo = std::max<Cycle>(from, b << kBusyBlockShift), hi = std::min<Cycle>(to, (b + 1) << kBusyBlockShift);
+    const double ticks = b < busy_blocks_.size() ? double(busy_blocks_[b]) : 0.0;
+    busy += ticks / double(uint64_t(1) << kTickShift) * double(hi - lo) / double(block_cycles);
+  }
+  return std::min(1.0, busy / (double(to - from) * double(channels_.size())));
+}
+
+Cycle MemorySystem::transferCycles(uint64_t bursts) const {
+  return bursts > 1 ? DramTimings::ceilCycles((bursts - 1) * t_.burst) : 0;
+}
+
+Cycle MemorySystem::unloadedCycles(bool write) const {
+  // Ticks, rounded up once (as a request's completion is).
+  if (write) return DramTimings::ceilCycles(t_.ctrl);
+  return DramTimings::ceilCycles(t_.ctrl + t_.trcd + t_.cl + t_.burst);
 }
 
 uint64_t MemorySystem::postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive) {
@@ -336,6 +375,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
     bank.act_ready = std::max(bank.last_end, act + tras) + trp;
   }
   c.busy += len;
+  addBusy(xfer, len);
   stats_.channel_busy[ch] = DramTimings::ceilCycles(c.busy);
   return end;
 }

@@ -24,6 +24,7 @@
 #include "oit_rop/memory/DramBusGaps.hpp"
 #include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/memory/DramWriteQueue.hpp"
+#include "oit_rop/RootCause.hpp"
 #include "oit_rop/Types.hpp"
 
 namespace oit::rop {
@@ -65,6 +66,24 @@ class MemorySystem {
   void coarsenSamples();
   // Peak bytes per core cycle the channels can move together.
   double peakBytesPerCycle() const;
+  // Root-cause split of a wait (RootCause.hpp): the request completing last
+  // since resetProbe(), with its latency: the cycles an idle controller takes
+  // to its first data (a read: controller + tRCD + CL + one burst, the bank
+  // precharged; a posted write: the controller accepting it), and the
+  // transfer of its further bursts on its busiest channel at the bus's rate.
+  // The rest of a wait is queueing. Queueing and transfer are bandwidth (the
+  // same bytes on a wider or idle bus take less), the first data latency.
+  void resetProbe() { probe_ = DramProbe{}; }
+  const DramProbe& probe() const { return probe_; }
+  Cycle unloadedCycles(bool write) const;
+  // The share of the channels' data-bus time busy over [from, to) (0 to 1),
+  // from a record of the bus time booked per block of kBusyBlock cycles: the
+  // part of a wait's unloaded access during which the buses moved other data
+  // is bandwidth, not latency (RootCause.hpp). Bookings still to come for the
+  // span (a partition a quantum behind) are not in it yet.
+  double busShare(Cycle from, Cycle to) const;
+  static constexpr unsigned kBusyBlockShift = 8;  // 256 cycles
+  Cycle transferCycles(uint64_t bursts) const;  // bursts - 1 beyond the first, rounded up
 
   // Added accessors (derived timing, for tests, reports and callers that
   // want the unloaded latency). Cycles are the exact fractional values the
@@ -141,6 +160,9 @@ class MemorySystem {
   uint64_t hits_ = 0, misses_ = 0;  // row hits and misses of the runs booked (added to stats_)
   uint64_t window_ = 0;  // DramBusGaps::Asker::window: queue_depth with FR-FCFS, 0 with FCFS
   MemoryStats stats_;
+  DramProbe probe_;
+  std::vector<uint64_t> busy_blocks_;  // bus ticks booked per 2^kBusyBlockShift cycles, all channels
+  void addBusy(uint64_t from_tick, uint64_t len);
 };
 
 }  // namespace oit::rop

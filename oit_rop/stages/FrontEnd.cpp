@@ -232,7 +232,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
       run_start = seq;
     }
     InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], pix_row[f.y] + pix_col[f.x], seq, 0, 0,
-            uint16_t(seq - run_start)};
+            uint16_t(seq - run_start), {0, 0}};
     if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;
@@ -253,6 +253,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
       ctx.opaque_z = oz;
       const model::InsertOutcome o = insert(algo, state + size_t(pixel) * words, f, pass, ctx);
       r.outcome = uint8_t(o);
+      r.work = ctx.work;
       ++outcomes[size_t(o)];
       if constexpr (First) {
         ++run.fragments;
@@ -289,7 +290,7 @@ void FrontEnd::refill() {
   pending_ = pending_.subspan(batch.size());
   if (batch.empty()) {
     // End of pass: every partition drains before its next pass (or resolve).
-    for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0});
+    for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0, {0, 0}});
     if (pass_ == 0) counts_.fragments_in = index_;
     if (progress_) progress_(double(pass_ + 1) / passes_, std::string(algo_.passName(pass_)));
     if (++pass_ < passes_) {

@@ -69,7 +69,7 @@ struct FrameGeometry {
   }
 };
 
-// One routed fragment (16 bytes; culled and inserted fragments alike).
+// One routed fragment (20 bytes; culled and inserted fragments alike).
 struct InRec {
   // kDeferredInsert: not inserted yet (lock.mode unordered / none, not culled):
   // its outcome is decided when it enters the lock, its Fragment travels in the
@@ -86,6 +86,9 @@ struct InRec {
   static constexpr uint8_t kCulledKind = 4;
   // seq - first seq of its primitive's run (restarts every 65536 records; 0 when the lock does not group)
   uint16_t prim_offset;
+  // What its insert did (rows compared and written: the BlendAlu's latency);
+  // {0, 0} while kDeferredInsert and for a culled fragment.
+  model::InsertWork work;
 };
 
 struct DrawCounts {

@@ -48,6 +48,23 @@ void expectWithin3Percent(uint64_t cycles, double bound) {
   EXPECT_LE(double(cycles), 1.03 * bound) << "bound " << bound << ", " << 100.0 * (double(cycles) / bound - 1) << " % above";
 }
 
+// The root-cause attribution names the resource the trace stresses as
+// timing.bound_by with at least 90 % of the partition-cycles (issue 22, item
+// 4; oit_rop/DESIGN.md "Root causes"), and the causes add up to every
+// partition's cycles.
+void expectBoundBy(const ChildRun& r, const std::string& cause) {
+  const auto& t = r.stats["timing"];
+  uint64_t charged = 0, ends = 0;
+  for (const auto& [k, v] : t["root_cause_cycles"].items()) charged += v.get<uint64_t>();
+  for (const auto& p : t["per_partition"]) ends += p["end_cycle"].get<uint64_t>();
+  EXPECT_EQ(charged, ends);
+  ::testing::Test::RecordProperty("bound_share", std::to_string(t["bound_by"]["share"].get<double>()));
+  EXPECT_EQ(t["bound_by"]["resource"].get<std::string>(), cause) << t["root_cause_cycles"].dump();
+  EXPECT_GE(t["bound_by"]["share"].get<double>(), 0.90) << t["root_cause_cycles"].dump();
+  EXPECT_DOUBLE_EQ(t["bound_by"]["share"].get<double>(),
+                   double(t["root_cause_cycles"][cause].get<uint64_t>()) / double(charged));
+}
+
 class Bounds : public ::testing::TestWithParam<SimEngine> {};
 
 // 16x16 pixels x 256 layers of alpha blending (rgba8: 4 B per pixel, always
@@ -65,6 +82,7 @@ TEST_P(Bounds, InputBound) {
   const auto r = runInChild([&] { return timed("alpha", rgba8(), fs, 16, 16, c); });
   ASSERT_TRUE(r.ok) << r.error;
   expectWithin3Percent(cyclesOf(r), 65536.0);
+  expectBoundBy(r, "input");
 }
 
 // The same trace at 4 fragments per clock into 1 blend per clock (rgba8 rows
@@ -78,11 +96,12 @@ TEST_P(Bounds, AluBound) {
   const auto r = runInChild([&] { return timed("alpha", rgba8(), fs, 16, 16, c); });
   ASSERT_TRUE(r.ok) << r.error;
   expectWithin3Percent(cyclesOf(r), 65536.0);
+  expectBoundBy(r, "alu");
 }
 
 // 4096 fragments to one pixel: each enters the lock when the one before
 // released it (end of blend), reaches the cache in that cycle, hits (10), and
-// blends for base 8 + row 2 x 1 row (alpha: always Stored, one row): a
+// blends for base 8 + 2 x 1 row written (alpha: one accumulator, no compare): a
 // release every 20 cycles, 4096 x 20 = 81 920 cycles however fast the input.
 TEST_P(Bounds, LockBoundOnOnePixel) {
   RopConfig c = base();
@@ -92,9 +111,10 @@ TEST_P(Bounds, LockBoundOnOnePixel) {
   const auto fs = layersOf(1, 1, 4096);
   const auto r = runInChild([&] { return timed("alpha", rgba8(), fs, 8, 8, c); });
   ASSERT_TRUE(r.ok) << r.error;
-  const double per_fragment = c.cache.hit_latency + c.alu.base_latency + c.alu.row_latency * 1.0;
+  const double per_fragment = c.cache.hit_latency + c.alu.base_latency + c.alu.cycles_per_row_moved * 1.0;  // no compare
   ASSERT_EQ(per_fragment, 20.0);
   expectWithin3Percent(cyclesOf(r), 4096 * per_fragment);
+  expectBoundBy(r, "lock_wait");
   EXPECT_EQ(r.stats["lock"]["conflicts"].get<uint64_t>(), 4095u);
 }
 
@@ -133,6 +153,7 @@ TEST_P(Bounds, L2BandwidthBound) {
                 r.stats["memory"]["dram_write_bytes"]["total"].get<uint64_t>(),
             0u);
   expectWithin3Percent(cyclesOf(r), 532480.0 / 4.0);
+  expectBoundBy(r, "l2");
 }
 
 // A whole frame bound by DRAM: the stream above, four layers, an 8 KiB ROP
@@ -176,6 +197,7 @@ TEST_P(Bounds, DramBoundFrame) {
   const double bytes_per_cycle = 12.8 * 1000.0 / 1150.0;
   const double cl = 11 * 1.25 * 1150.0 / 1000.0;
   expectWithin3Percent(cyclesOf(r), double(read + written) / bytes_per_cycle + 345 * cl);
+  expectBoundBy(r, "dram_bandwidth");
 }
 
 INSTANTIATE_TEST_SUITE_P(Validation, Bounds, ::testing::ValuesIn(kBothEngines), engineName);

@@ -95,7 +95,8 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"cache.hit_latency", "20"},
       {"alu.blends_per_clock", "1"},
       {"alu.base_latency", "16"},
-      {"alu.row_latency", "4"},
+      {"alu.cycles_per_row_moved", "4"},
+      {"alu.cycles_per_compare", "2"},
       {"l2.size_bytes", "32KiB"},
       {"l2.ways", "8"},
       {"l2.slices", "2"},
@@ -166,6 +167,17 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
         EXPECT_LE(faster, 1 - misses / base_misses) << sc.name << ": a smaller scoreboard " << 100 * faster
                                                     << " % faster, ROP-cache misses " << misses << " against "
                                                     << base_misses;
+        continue;
+      }
+      // The second exception (issue 22, inserts cost their work): a wider
+      // shader-latency spread spaces a pixel's fragments further apart, so in a
+      // lock-bound frame fewer of them wait for the one before (particles, cycle
+      // engine: lock waits 1,033,411 -> 861,073, the frame 0.54 % faster). Only
+      // with fewer lock waits, and by under 1 %.
+      if (path == "input.latency_max" && faster > 0.005) {
+        EXPECT_LT(r.stats["lock"]["wait_cycles"].get<double>(), ref.stats["lock"]["wait_cycles"].get<double>())
+            << sc.name;
+        EXPECT_LT(faster, 0.01) << sc.name << ": " << why(r) << " against " << why(ref);
         continue;
       }
       EXPECT_GE(cycles, base_cycles * 0.995)
