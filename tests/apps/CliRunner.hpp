@@ -142,4 +142,24 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// A test suite sharing one generated trace, made once per suite: Tag names
+// the suite's folder (kFolder), the trace's file name (kFile) and the
+// `oitsim gen` arguments (kGen, without -o).
+template <class Tag>
+class GeneratedTraceSuite : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir(Tag::kFolder);
+    trace_ = dir_->file(Tag::kFile);
+    CliResult r = runOitsim(std::string(Tag::kGen) + " -o " + trace_);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static inline TempDir* dir_ = nullptr;
+  static inline std::string trace_;
+};
+
 }  // namespace oit::test

@@ -37,23 +37,12 @@ constexpr bool kAddressSanitizer = false;
 
 // A glass trace without opaque draws (an A-buffer's pool is then known
 // exactly), shared by the tests of this file.
-class CliReliability : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir("cli_reliability");
-    trace_ = dir_->file("glass.oitt");
-    CliResult r = runOitsim("gen glass --width 96 --height 64 -o " + trace_);
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-  }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
-  static TempDir* dir_;
-  static std::string trace_;
+struct CliReliabilityTrace {
+  static constexpr const char* kFolder = "cli_reliability";
+  static constexpr const char* kFile = "glass.oitt";
+  static constexpr const char* kGen = "gen glass --width 96 --height 64";
 };
-TempDir* CliReliability::dir_ = nullptr;
-std::string CliReliability::trace_;
+class CliReliability : public GeneratedTraceSuite<CliReliabilityTrace> {};
 
 // Exit code and output of `oitsim args`, failing the test instead of hanging
 // when it does not end within `limit`.

@@ -15,23 +15,12 @@ namespace {
 namespace fs = std::filesystem;
 
 // A small particles trace, shared by the tests of this file.
-class CliRun : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir("cli_run");
-    trace_ = dir_->file("p.oitt");
-    CliResult r = runOitsim("gen particles --width 160 --height 90 --count 300 --backdrop -o " + trace_);
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-  }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
-  static TempDir* dir_;
-  static std::string trace_;
+struct CliRunTrace {
+  static constexpr const char* kFolder = "cli_run";
+  static constexpr const char* kFile = "p.oitt";
+  static constexpr const char* kGen = "gen particles --width 160 --height 90 --count 300 --backdrop";
 };
-TempDir* CliRun::dir_ = nullptr;
-std::string CliRun::trace_;
+class CliRun : public GeneratedTraceSuite<CliRunTrace> {};
 
 TEST_F(CliRun, GenThenInfoPrintsStatistics) {
   CliResult r = runOitsim("info " + trace_);
