@@ -1,6 +1,7 @@
 #include "apps/RunMemory.hpp"
 
 #include <fmt/format.h>
+#include "oit_rop/memory/CacheLevel.hpp"
 #include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -163,6 +164,20 @@ constexpr uint64_t kMinReferenceBand = 64 * kMiB;
 constexpr double kAllocatorSlack = 0.03;
 
 }  // namespace
+
+uint64_t sharedLevelHostBytes(const oit::rop::RopConfig& rc, uint64_t frame_bytes) {
+  const bool classify = rc.stats.level_miss_classes;
+  uint64_t bytes = 0;
+  if (rc.l2.size_bytes)
+    bytes += oit::rop::CacheLevel::hostBytesEstimate(rc.l2, classify, frame_bytes / rc.l2.line_bytes);
+  if (rc.l3.size_bytes) {
+    const uint64_t above = rc.l2.size_bytes ? rc.l2.size_bytes / rc.l2.line_bytes : 0;
+    uint64_t lines = frame_bytes / rc.l3.line_bytes;
+    if (rc.l3.victim_only) lines = lines > above ? lines - above : 0;
+    bytes += oit::rop::CacheLevel::hostBytesEstimate(rc.l3, classify, lines);
+  }
+  return bytes;
+}
 
 uint64_t RunMemoryEstimate::peak() const { return base + peakPhase().bytes; }
 

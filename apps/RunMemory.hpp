@@ -10,6 +10,7 @@
 // compares the estimate with the peak resident set of real runs.
 #pragma once
 
+#include "oit_rop/config/RopConfig.hpp"
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -57,6 +58,12 @@ struct RunShape {
   unsigned seeds = 0;           // --seeds N: the parent keeps every seed's image (0: one run, in this process)
   unsigned seed_processes = 0;  // the children that simulate at once (each a whole run)
 };
+
+// The host memory of the shared cache levels (l2, l3) of `rc` for a frame
+// that puts `frame_bytes` through them (its per-pixel state, depth and colour):
+// their tag-store pages and miss-class shadows (CacheLevel::hostBytesEstimate);
+// a victim level holds what the level above cannot.
+uint64_t sharedLevelHostBytes(const oit::rop::RopConfig& rc, uint64_t frame_bytes);
 
 struct MemoryPhase {
   std::string name;   // "render", "reference", "metrics", "outputs"

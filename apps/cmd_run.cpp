@@ -32,7 +32,6 @@
 #include "model/Metrics.hpp"
 #include "oit_rop/ChildRuns.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
-#include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
 #include "traces/InputFile.hpp"
@@ -378,25 +377,8 @@ void runReplay(RunArgs& a) {
   shape.bytes_per_pixel = algo->bytesPerPixel();
   shape.pool_bytes_per_fragment = algo->poolBytesPerFragment();
   shape.timing = timing;
-  if (timing) {
-    // The lines the frame puts through the shared levels: its per-pixel state
-    // and its depth and colour (4 B each per pixel); a victim level holds what
-    // the level above cannot.
-    const rop::RopConfig& rc = tree.config();
-    const uint64_t frame_bytes = (shape.bytes_per_pixel + 8) * uint64_t(h.width) * h.height;
-    const bool classify = rc.stats.level_miss_classes;
-    uint64_t l2_lines = 0, l3_lines = 0;
-    if (rc.l2.size_bytes) {
-      l2_lines = frame_bytes / rc.l2.line_bytes;
-      shape.timing_level_bytes += rop::CacheLevel::hostBytesEstimate(rc.l2, classify, l2_lines);
-    }
-    if (rc.l3.size_bytes) {
-      const uint64_t above = rc.l2.size_bytes ? rc.l2.size_bytes / rc.l2.line_bytes : 0;
-      l3_lines = frame_bytes / rc.l3.line_bytes;
-      if (rc.l3.victim_only) l3_lines = l3_lines > above ? l3_lines - above : 0;
-      shape.timing_level_bytes += rop::CacheLevel::hostBytesEstimate(rc.l3, classify, l3_lines);
-    }
-  }
+  if (timing)
+    shape.timing_level_bytes = sharedLevelHostBytes(tree.config(), (shape.bytes_per_pixel + 8) * uint64_t(h.width) * h.height);
   shape.reference = a.reference == "abuffer" ? ReferenceKind::Exact
                     : a.reference == "none"  ? ReferenceKind::None
                                              : ReferenceKind::File;
