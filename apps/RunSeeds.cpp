@@ -49,7 +49,8 @@ rop::TimingResult SeedRuns::run(const std::string& trace, uint32_t width, uint32
   rq.progress = [&](double f) { progress.update(f, fmt::format("{} seeds", seeds)); };
   std::vector<rop::TimingResult> runs = rop::runTimingSeeds(rq);
   for (size_t i = 0; i < runs.size(); ++i) {
-    images.push_back(runs[i].image);
+    // Seed 0's image is also the run's own (returned below): copied; the others moved.
+    images.push_back(i == 0 ? runs[i].image : std::move(runs[i].image));
     input_seeds.push_back(cfg.input.seed + i);
     stats.push_back(runs[i].stats);
   }

@@ -15,7 +15,7 @@ namespace oit::cli {
 namespace {
 
 struct ConfigArgs {
-  std::string preset;  // empty: the file's "preset" key, else igpu
+  std::string preset;  // empty: the file's "preset" key, else iris-pro-5200
   std::string config_file;
   std::vector<std::string> sets;
   bool json = false;
@@ -49,7 +49,8 @@ void addConfigCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("config", "Print the effective model configuration (preset < file < --set)");
   std::string names;
   for (const auto& n : rop::presetNames()) names += (names.empty() ? "" : ", ") + n;
-  cmd->add_option("--preset,-p", a->preset, "Hardware preset: " + names + " (default igpu, or the file's \"preset\")");
+  cmd->add_option("--preset,-p", a->preset,
+                  "Hardware preset: " + names + " (aliases igpu, dgpu; default iris-pro-5200, or the file's \"preset\")");
   cmd->add_option("--config,-c", a->config_file, "JSON file of property values, nested or dotted keys");
   cmd->add_option("--set,-s", a->sets, "Override one property: path=value (repeatable)")->take_all();
   cmd->add_flag("--json", a->json, "Print the effective tree as JSON (usable as --config)");

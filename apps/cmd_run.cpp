@@ -11,21 +11,30 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/Commands.hpp"
 #include "apps/OutputFiles.hpp"
-#include "apps/TraceOptions.hpp"
 #include "apps/Progress.hpp"
+#include "apps/RunMemory.hpp"
+#include "apps/RunSeeds.hpp"
+#include "apps/StagedOutputs.hpp"
+#include "apps/TraceOptions.hpp"
 #include "model/AlgorithmSettings.hpp"
 #include "model/Flip.hpp"
-#include "apps/RunSeeds.hpp"
 #include "model/FunctionalRenderer.hpp"
 #include "model/Metrics.hpp"
+#include "oit_rop/ChildRuns.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
+#include "traces/InputFile.hpp"
 #include "traces/TempFiles.hpp"
 #include "traces/TraceIO.hpp"
 
@@ -38,7 +47,11 @@ using model::RenderResult;
 
 struct RunArgs {
   std::string trace, out, algo = "mlab", mode = "timing", format = "fp32";
-  std::string preset, config_file, vcd;  // preset empty: the --config file's "preset", else igpu
+  std::string preset, config_file, vcd;  // preset empty: the --config file's "preset", else iris-pro-5200
+  std::string reference = "abuffer";      // abuffer (exact, in bands), none, or a PFM file
+  std::string memory_budget;              // empty: kDefaultBudgetPercent of physical memory
+  bool config_given = false;
+  std::string out_of_memory;  // the message for a failed allocation, once the frame is known
   std::vector<std::string> sets;
   uint32_t width = 0, height = 0;
   bool width_given = false, height_given = false;
@@ -73,6 +86,58 @@ TimedRender renderWith(FragmentSource& src, model::OitAlgorithm& algo, const mod
   t.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.finish();
   return t;
+}
+
+// The exact reference in bands of at most `band_bytes` (heads + nodes); the
+// band file, when there is more than one band, goes to `spill_dir`.
+model::BandedRender renderReference(FragmentSource& src, const model::Rgb& clear, uint64_t band_bytes,
+                                    const std::string& spill_dir, bool show_progress, double& seconds) {
+  Progress progress("reference", show_progress);
+  model::RenderOptions ro;
+  ro.clear_colour = clear;
+  ro.progress = [&](const model::RenderProgress& p) {
+    const double within = p.fragments_total ? double(p.fragments_done) / double(p.fragments_total) : 0.0;
+    progress.update((double(p.pass) + within) / double(p.passes), std::string(p.what));
+  };
+  auto abuffer = model::makeAlgorithm("abuffer", {});
+  const auto t0 = std::chrono::steady_clock::now();
+  model::BandedRender r = model::FunctionalRenderer(ro).renderInBands(src, *abuffer, {band_bytes, spill_dir});
+  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
+  return r;
+}
+
+// --reference FILE.pfm, before any work: a regular file whose PFM header
+// gives the frame's size and whose length fits it (readPfm checks the rest
+// when the file is read, after the run).
+void checkReferenceFile(const std::string& path, uint32_t width, uint32_t height) {
+  const InputFile in = openInputFile(path);
+  if (!in) throw std::invalid_argument(fmt::format("--reference {}: {} (expected a PFM image)", path, in.problem));
+  const uint64_t payload = uint64_t(width) * height * 12;  // RGB floats; a grey "Pf" is a third of it
+  if (in.size > payload + 1024)
+    throw std::invalid_argument(fmt::format(
+        "--reference {}: is {} bytes, more than a {} x {} PFM image takes ({} bytes of pixels): not the reference of "
+        "this trace",
+        path, in.size, width, height, payload));
+  char head[64] = {};
+  const ssize_t n = ::pread(in.fd.get(), head, sizeof head - 1, 0);
+  std::istringstream tokens(std::string(head, n > 0 ? size_t(n) : 0));
+  std::string magic;
+  uint64_t w = 0, hgt = 0;
+  if (!(tokens >> magic >> w >> hgt) || (magic != "PF" && magic != "Pf"))
+    throw std::invalid_argument(
+        fmt::format("--reference {}: not a PFM image (expected the header PF <width> <height>)", path));
+  if (w != width || hgt != height)
+    throw std::invalid_argument(fmt::format("--reference {}: is a {} x {} image, the trace's frame is {} x {}", path,
+                                            w, hgt, width, height));
+}
+
+model::Image readReferenceFile(const std::string& path) {
+  try {
+    return model::readPfm(path);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("--reference {}", e.what()));
+  }
 }
 
 nlohmann::json metricsJson(const model::ImageMetrics& m) {
@@ -114,9 +179,33 @@ uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
 // Cycles, frame time, stalls by cause, DRAM bytes and footprint side by side.
 void printTimingSummary(const nlohmann::json& j) {
   const auto& t = j["timing"];
-  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), {} idle cycles skipped\n",
+  // The first line answers "what bounds this frame?" and where its time went.
+  const auto& ph = t["phase_cycles"];
+  std::string passes;
+  for (const auto& c : ph["transparent"]) passes += (passes.empty() ? "" : " + ") + std::to_string(c.get<uint64_t>());
+  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), bound by {} ({:.1f} % of partition-cycles); "
+             "phases: opaque {}, transparent {}, resolve {} cycles; {} idle cycles skipped\n",
              t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
-             t["partitions"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+             t["partitions"].get<uint64_t>(), t["bound_by"]["resource"].get<std::string>(),
+             100.0 * t["bound_by"]["share"].get<double>(), ph["opaque"].get<uint64_t>(), passes.empty() ? "0" : passes,
+             ph["resolve"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
+  // Root causes in descending order (those above 0.05 %), utilisation per resource.
+  std::vector<std::pair<uint64_t, std::string>> causes;
+  uint64_t charged = 0;
+  for (auto it = t["root_cause_cycles"].begin(); it != t["root_cause_cycles"].end(); ++it) {
+    causes.push_back({it.value().get<uint64_t>(), it.key()});
+    charged += causes.back().first;
+  }
+  std::stable_sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string root;
+  for (const auto& [c, k] : causes)
+    if (charged && double(c) / double(charged) >= 0.0005)
+      root += fmt::format("{}{} {:.1f} %", root.empty() ? "" : ", ", k, 100.0 * double(c) / double(charged));
+  fmt::print("root causes {}\n", root.empty() ? "none" : root);
+  std::string util;
+  for (auto it = t["utilization"].begin(); it != t["utilization"].end(); ++it)
+    util += fmt::format("{}{} {:.1f} %", util.empty() ? "" : ", ", it.key(), 100.0 * it.value().get<double>());
+  fmt::print("utilisation {}\n", util);
   fmt::print("stalls      {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "stage", "busy", "lock wait",
              "sb full", "miss wait", "dram bw", "alu busy", "starved");
   for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {
@@ -127,6 +216,13 @@ void printTimingSummary(const nlohmann::json& j) {
                c["cache_miss_wait"].get<uint64_t>(), c["dram_bandwidth"].get<uint64_t>(),
                c["alu_busy"].get<uint64_t>(), c["input_starved"].get<uint64_t>());
   }
+  // The A-buffer's own waits (stall causes atomic_wait, list_walk, sort), when it had any.
+  const auto& ss = t["stages"];
+  const uint64_t atomic = ss["blend_alu"]["stalls"].value("atomic_wait", uint64_t(0));
+  const uint64_t walk = ss["resolve"]["stalls"].value("list_walk", uint64_t(0));
+  const uint64_t sort = ss["resolve"]["stalls"].value("sort", uint64_t(0));
+  if (atomic + walk + sort != 0)
+    fmt::print("            blend_alu atomic wait {}, resolve list walk {}, sort {} cycles\n", atomic, walk, sort);
   const auto& m = j["memory"];
   fmt::print("dram        read {} (arrays {}, depth {}, colour {}, resolve {}), written {}, peak {:.1f} GB/s, mean {:.1f} GB/s\n",
              humanBytes(double(num(m, "dram_read_bytes", "total"))),
@@ -135,6 +231,16 @@ void printTimingSummary(const nlohmann::json& j) {
              humanBytes(double(num(m, "dram_read_bytes", "resolve"))),
              humanBytes(double(num(m, "dram_write_bytes", "total"))), m["peak_gbps"].get<double>(),
              m["mean_gbps"].get<double>());
+  // Beside the DRAM line: the traffic against what a perfect cache would move
+  // (what the frame left dirty in the caches counts: it leaves later).
+  std::string rates;
+  for (const auto& l : m["levels"])
+    rates += fmt::format("{}{} {:.1f}%", rates.empty() ? "" : ", ", l["name"].get<std::string>(),
+                         100.0 * l["hit_rate"].get<double>());
+  fmt::print("compulsory  {}; moved {:.2f}x that (DRAM {} + left dirty in the caches {}); hit rate {}\n",
+             humanBytes(double(num(m, "compulsory_bytes", "total"))), m["traffic_over_compulsory"].get<double>(),
+             humanBytes(double(num(m, "dram_read_bytes", "total") + num(m, "dram_write_bytes", "total"))),
+             humanBytes(double(num(m, "end_dirty_bytes", "total"))), rates);
   const auto& fa = m["footprint"]["allocated"];
   const auto& ft = m["footprint"]["touched"];
   auto total = [](const nlohmann::json& o) {
@@ -163,61 +269,65 @@ void checkOptions(const RunArgs& a) {
   if (!(a.ppd > 0.0 && a.ppd <= 10000.0))
     throw std::invalid_argument(fmt::format("--ppd: expected pixels per degree in (0, 10000], got {}", a.ppd));
   if (a.vcd_given && a.vcd.empty()) throw std::invalid_argument("--vcd: expected a file name, got an empty path");
+  if (a.trace.empty()) throw std::invalid_argument("--trace: expected a trace file (.oitt or .csv), got an empty path");
+  if (a.config_given && a.config_file.empty())
+    throw std::invalid_argument("--config: expected a JSON file, got an empty path");
+  if (a.reference.empty())
+    throw std::invalid_argument("--reference: expected abuffer, none or a PFM file, got an empty value");
   checkOutputFolder("--out", a.out);
   if (!a.vcd.empty() && a.mode != "timing")
     throw std::invalid_argument(
         fmt::format("--vcd {}: a VCD needs the timing model; drop --mode {} (the default is timing)", a.vcd, a.mode));
   checkOrderingOptions(a.mode, a.seeds_given, a.seeds);
+  if (a.seeds_given && a.reference == "none")
+    throw std::invalid_argument(fmt::format(
+        "--seeds {}: the flicker measures each seed's image against the reference; --reference none has none "
+        "(give --reference abuffer or FILE.pfm)",
+        a.seeds));
 }
 
 // The files a run writes into --out, the report last.
 constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "flicker.png",
                                     "report.json"};
 
-// Output files are staged under temporary names and renamed together at the
-// end; a run that fails or is interrupted leaves none of them behind.
-class StagedOutputs {
- public:
-  std::string stage(const fs::path& final_path) {
-    staged_.push_back({TempFile((final_path.parent_path() /
-                                 fmt::format(".{}.partial.{}", final_path.filename().string(), ::getpid()))
-                                    .string()),
-                       final_path.string()});
-    return staged_.back().first.path();
-  }
-  void commit() {
-    std::vector<std::string> done;
-    for (const auto& [tmp, path] : staged_) {
-      std::error_code ec;
-      fs::rename(tmp.path(), path, ec);
-      if (ec) {
-        const std::string why = ec.message();
-        for (const std::string& d : done) fs::remove(d, ec);  // all or none
-        throw std::runtime_error(fmt::format("{}: cannot rename {} to it: {}", path, tmp.path(), why));
-      }
-      done.push_back(path);
-    }
-    for (auto& staged : staged_) staged.first.keep();
-  }
-
- private:
-  std::vector<std::pair<TempFile, std::string>> staged_;  // temporary, final path
-};
+// Counts the fragments of transparent draws: the most the A-buffer under
+// test can store (the trace's record count bounds it less tightly).
+uint64_t transparentFragments(FragmentSource& src) {
+  const model::DrawClassifier classes(src.header());
+  src.rewind();
+  uint64_t n = 0;
+  model::DrawRun draws(classes);
+  for (auto b = src.next(); !b.empty(); b = src.next())
+    for (const Fragment& f : b) n += draws.isOpaque(f.draw) ? 0 : 1;
+  src.rewind();
+  return n;
+}
 
 void runReplay(RunArgs& a) {
+  returnLargeBlocksToTheSystem();  // what the memory estimate assumes
   const fs::path out(a.out);
-  // Never overwrite or remove the input: no output may be the trace itself.
-  for (const char* name : kOutputs)
+  const bool reference_file = a.reference != "abuffer" && a.reference != "none";
+  // Never overwrite or remove the input: no output may be the trace itself
+  // (nor the --reference file).
+  for (const char* name : kOutputs) {
     if (sameFile((out / name).string(), a.trace))
       throw std::invalid_argument(fmt::format("--out {}: {} would overwrite the input trace --trace {}", a.out,
                                               (out / name).string(), a.trace));
+    if (reference_file && sameFile((out / name).string(), a.reference))
+      throw std::invalid_argument(fmt::format(
+          "--reference {}: is {}, which this run replaces; copy it out of the --out folder first", a.reference,
+          (out / name).string()));
+  }
   if (!a.vcd.empty() && sameFile(rop::vcdFilePath(a.vcd), a.trace))
     throw std::invalid_argument(
         fmt::format("--vcd {}: {} is the input trace --trace {}", a.vcd, rop::vcdFilePath(a.vcd), a.trace));
   // An earlier run's outputs in the folder must never pass for this run's, also
-  // when this run fails on an option or the trace: remove them before any check.
+  // when this run fails on an option or the trace: remove them before any check,
+  // with what a run killed outright left staged (its process is gone).
   std::error_code ec;
+  std::vector<std::string> names(std::begin(kOutputs), std::end(kOutputs));
   if (fs::is_directory(out, ec)) {
+    removeAbandonedOutputs(out, names);
     for (const char* name : kOutputs) {
       fs::remove(out / name, ec);
       if (ec && ec != std::errc::no_such_file_or_directory)
@@ -225,9 +335,17 @@ void runReplay(RunArgs& a) {
             fmt::format("--out {}: cannot remove the old {}: {}", a.out, name, ec.message()));
     }
   }
+  if (!a.vcd.empty()) {
+    // The VCD likewise: an earlier run's (a regular file; nothing else is
+    // touched) and what a killed run left staged.
+    const fs::path vcd_file(rop::vcdFilePath(a.vcd));
+    removeAbandonedOutputs(vcd_file.parent_path(), {vcd_file.filename().string()});
+    if (fs::is_regular_file(fs::symlink_status(vcd_file, ec))) fs::remove(vcd_file, ec);
+  }
   checkOptions(a);
   a.params.format = model::parseStorageFormat(a.format);
   const bool timing = a.mode == "timing";
+  const MemoryBudget budget = parseMemoryBudget(a.memory_budget);
   // Resolve and validate the ROP configuration before any work, whatever the
   // mode, so a bad --preset, --config or --set fails at once and never passes
   // silently in functional mode (which does not use it).
@@ -241,29 +359,62 @@ void runReplay(RunArgs& a) {
     }
   }
 
+  // The A-buffer under test takes its pool and local array from the ROP
+  // configuration in both modes (the exact reference below does not).
+  if (a.algo == "abuffer") a.params.abuffer = rop::abufferBudget(tree.config().abuffer);
   auto algo = model::makeAlgorithm(a.algo, a.params);  // algorithm, k and its limits: before the trace too
   auto src = openTraceWithSize(a.trace, a.width, a.height);  // header and size are validated here
   const TraceHeader& h = src->header();
-  // Per pixel at least: the algorithm's arrays, the reference A-buffer's head
-  // (4 B), the opaque layer (depth + colour, 16 B) and three RGB float images
-  // (image, reference, difference).
-  // (--seeds N: the parent also keeps every seed's image and its sRGB8 codes, 15 B per pixel each.)
-  checkFrameFitsInMemory(a.trace, h.width, h.height, algo->bytesPerPixel() + 4 + 16 + 3 * 12 + 15 * uint64_t(a.seeds),
-                         "the " + a.algo + " arrays, the reference and the images" +
-                             (a.seeds_given ? fmt::format(" and {} seeds' images", a.seeds) : ""));
+  // A pool that cannot hold the frame's heads: one line naming abuffer.pool_bytes, before any work.
+  const uint64_t pool_nodes =
+      a.algo == "abuffer" ? model::capacityNodes(a.params.abuffer, h.width, h.height, algo->poolNodeBytes()) : 0;
+  // The run's peak memory, phase by phase, against the budget: a frame that
+  // cannot fit is refused before any work (RunMemory.hpp).
+  RunShape shape;
+  shape.width = h.width;
+  shape.height = h.height;
+  shape.fragments = h.fragment_count;
+  shape.bytes_per_pixel = algo->bytesPerPixel();
+  shape.pool_bytes_per_fragment = algo->poolBytesPerFragment();
+  shape.timing = timing;
+  if (timing)
+    shape.timing_level_bytes = sharedLevelHostBytes(tree.config(), (shape.bytes_per_pixel + 8) * uint64_t(h.width) * h.height);
+  shape.reference = a.reference == "abuffer" ? ReferenceKind::Exact
+                    : a.reference == "none"  ? ReferenceKind::None
+                                             : ReferenceKind::File;
+  // An abuffer run that is exact itself (fp32 nodes, unlimited pool and
+  // local array) is its own reference; otherwise the exact A-buffer is.
+  shape.run_is_reference =
+      a.algo == "abuffer" && a.params.format == model::StorageFormat::Fp32 && a.params.abuffer.unlimited();
+  if (a.seeds_given) {
+    shape.seeds = a.seeds;
+    shape.seed_processes = std::min(rop::usableCores(), a.seeds);
+  }
+  // The A-buffer under test holds transparent fragments only: a quick pass
+  // counts them, for its reservation and the estimate (the record count would
+  // refuse a frame with many opaque ones). The reference's bands need no count
+  // here (they count what reaches them); its estimate takes the record count.
+  // A preallocated pool holds no more than its nodes (the rest are dropped).
+  if (shape.pool_bytes_per_fragment > 0) shape.fragments = std::min(transparentFragments(*src), pool_nodes);
+  const RunMemoryEstimate mem = estimateRunMemory(shape, residentBytes(), budget.bytes);
+  checkRunFitsBudget(mem, budget, a.trace, shape, a.algo);
+  if (shape.reference == ReferenceKind::File) checkReferenceFile(a.reference, h.width, h.height);
+  a.out_of_memory = outOfMemoryMessage(mem, budget, a.trace, shape, a.algo);
+  algo->reservePool(shape.pool_bytes_per_fragment > 0 ? shape.fragments : 0);
   const model::Rgb clear{a.background[0], a.background[1], a.background[2]};
-
 
   TimedRender run;
   nlohmann::json timing_stats;
   SeedRuns seed_runs;
-  // SystemC writes the VCD in place while it runs: a temporary until the run succeeded.
-  TempFile vcd(a.vcd.empty() ? std::string() : rop::vcdFilePath(a.vcd));
+  // SystemC writes the VCD while it runs: under a staged name (ending in
+  // ".vcd", which SystemC would append), renamed with the other outputs.
+  StagedOutputs staged;
+  const std::string vcd_staged = a.vcd.empty() ? std::string() : staged.stage(rop::vcdFilePath(a.vcd), ".vcd");
   if (timing) {
     Progress progress(a.algo + " (timing)", !a.quiet);
     rop::TimingOptions to;
     to.clear_colour = clear;
-    to.vcd_path = a.vcd;
+    to.vcd_path = vcd_staged;
     to.progress = [&](double fraction, const std::string& what) { progress.update(fraction, what); };
     rop::TimingResult t = a.seeds_given ? seed_runs.run(a.trace, a.width, a.height, a.algo, a.params, a.seeds,
                                                         tree.config(), to, progress)
@@ -277,16 +428,35 @@ void runReplay(RunArgs& a) {
   } else {
     run = renderWith(*src, *algo, clear, !a.quiet, a.algo);
   }
+  // The reference is the exact A-buffer (unlimited pool and local array, fp32
+  // nodes) whatever the algorithm under test: the run itself when it is that,
+  // else built in bands that fit the memory the rest of the run needs anyway;
+  // or a file, or none.
   TimedRender ref;
-  if (a.algo == "abuffer") {
+  unsigned ref_bands = 0;
+  uint64_t band_file_bytes = 0;
+  if (shape.reference == ReferenceKind::Exact && shape.run_is_reference) {
     ref = run;
-  } else {
-    auto reference = model::makeAlgorithm("abuffer", a.params);
-    ref = renderWith(*src, *reference, clear, !a.quiet, "reference");
+  } else if (shape.reference == ReferenceKind::Exact) {
+    // The band file (several bands only) goes beside the outputs: the
+    // --out folder, or the nearest folder of its path that exists.
+    fs::path spill = fs::absolute(out, ec);
+    while (!spill.empty() && !fs::is_directory(spill, ec) && spill != spill.parent_path()) spill = spill.parent_path();
+    model::BandedRender b =
+        renderReference(*src, clear, mem.reference_band_bytes, spill.string(), !a.quiet, ref.wall_seconds);
+    ref.result = std::move(b.result);
+    ref_bands = b.bands;
+    band_file_bytes = b.spill_bytes;
+  } else if (shape.reference == ReferenceKind::File) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ref.result.image = readReferenceFile(a.reference);
+    ref.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  const model::ImageMetrics m = model::compareImages(run.result.image, ref.result.image);
+  const bool compared = shape.reference != ReferenceKind::None;
+  const model::ImageMetrics m = compared ? model::compareImages(run.result.image, ref.result.image) : model::ImageMetrics{};
   const model::FlipMap flip =
-      model::ldrFlip(model::toSrgb8Image(ref.result.image), model::toSrgb8Image(run.result.image), a.ppd);
+      compared ? model::ldrFlip(model::toSrgb8Image(ref.result.image), model::toSrgb8Image(run.result.image), a.ppd)
+               : model::FlipMap{};
   const model::RenderCounts& c = run.result.counts;
   if (!c.balanced())
     throw std::logic_error(fmt::format("fragment outcomes do not sum to fragments in ({} != {} + {} + {} + {} + {})",
@@ -310,6 +480,16 @@ void runReplay(RunArgs& a) {
                  {"seed", a.params.seed},
                  {"background", a.background},
                  {"ignored_settings", model::ignoredSettings(a.algo)}};
+  if (!algo->bounded()) {
+    const model::ABufferBudget& b = a.params.abuffer;
+    const uint64_t cap = algo->poolCapacityNodes();
+    j["config"]["abuffer"] = {{"pool_bytes", b.pool_bytes},
+                              {"nodes_per_pixel", b.nodes_per_pixel},
+                              {"pool_nodes", cap == UINT64_MAX ? 0 : cap},  // 0: unlimited
+                              {"node_bytes", algo->poolNodeBytes()},
+                              {"max_sorted", b.max_sorted},
+                              {"overflow", b.overflow == model::ABufferOverflow::Truncate ? "truncate" : "spill"}};
+  }
   nlohmann::json passes = nlohmann::json::array();
   for (unsigned p = 0; p < c.pass_outcomes.size(); ++p)
     passes.push_back({{"name", std::string(algo->passName(p))},
@@ -318,27 +498,36 @@ void runReplay(RunArgs& a) {
                       {"discarded", c.pass_outcomes[p][2]}});
   j["fragments"] = {{"in", c.fragments_in},       {"opaque", c.opaque},   {"culled_by_depth", c.culled},
                     {"stored", c.stored},         {"merged", c.merged},   {"discarded", c.discarded},
+                    {"dropped_pool_full", algo->bounded() ? 0 : c.discarded},
                     {"outcomes_sum_to_in", c.balanced()}, {"passes", passes}};
   j["memory"] = {{"bytes_per_pixel", algo->bytesPerPixel()},
                  {"state_bytes", run.result.state_bytes},
                  {"state_read_bytes", c.bytes_read},
                  {"state_write_bytes", c.bytes_written},
                  {"source_passes", c.source_passes}};
-  j["image"] = {{"files",
-                 {{"image_png", "image.png"},
-                  {"image_pfm", "image.pfm"},
-                  {"reference_pfm", "reference.pfm"},
-                  {"diff_png", "diff.png"},
-                  {"flip_png", "flip.png"}}},
-                {"reference", "abuffer"},
-                {"order", imageOrder(a.mode, tree.config())},
-                {"metrics", metricsJson(m)}};
-  j["image"]["metrics"]["flip"] = flipJson(flip, a.ppd);
+  j["image"] = {{"files", {{"image_png", "image.png"}, {"image_pfm", "image.pfm"}}},
+                {"reference", shape.reference == ReferenceKind::File ? "file" : a.reference},
+                {"order", imageOrder(a.mode, tree.config())}};
+  if (compared) {
+    j["image"]["files"]["reference_pfm"] = "reference.pfm";
+    j["image"]["files"]["diff_png"] = "diff.png";
+    j["image"]["files"]["flip_png"] = "flip.png";
+    j["image"]["metrics"] = metricsJson(m);
+    j["image"]["metrics"]["flip"] = flipJson(flip, a.ppd);
+  }
+  if (shape.reference == ReferenceKind::File) j["image"]["reference_file"] = a.reference;
   model::Image flicker;
   if (a.seeds_given) flicker = seed_runs.addFlicker(j, ref.result.image);
   j["sim"] = {{"wall_seconds", run.wall_seconds},
               {"fragments_per_second", run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0},
               {"reference_wall_seconds", ref.wall_seconds}};
+  // Machine-dependent (the budget's default is a share of this machine's
+  // memory) and measured: like the wall clock, not part of the deterministic report.
+  j["sim"]["memory"] = {{"budget_bytes", budget.bytes},
+                        {"estimate_bytes", mem.peak()},
+                        {"estimate_phase", mem.peakPhase().name},
+                        {"reference_bands", ref_bands},
+                        {"reference_band_file_bytes", band_file_bytes}};
   if (timing) {
     j["config"]["rop"] = tree.toJson();
     // The timing model's sections; its fragment and memory sections extend the
@@ -358,16 +547,18 @@ void runReplay(RunArgs& a) {
   // report last), so a failure or an interrupt leaves no partial set.
   fs::create_directories(out, ec);
   if (ec) throw std::runtime_error(fmt::format("--out {}: cannot create the folder: {}", a.out, ec.message()));
-  StagedOutputs staged;
   model::writePng(run.result.image, staged.stage(out / "image.png"));
   model::writePfm(run.result.image, staged.stage(out / "image.pfm"));
-  model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
-  model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
-  model::writeFlipPng(flip, staged.stage(out / "flip.png"));
+  if (compared) {
+    model::writePfm(ref.result.image, staged.stage(out / "reference.pfm"));
+    model::writePng(model::differenceImage(run.result.image, ref.result.image, 4.0f), staged.stage(out / "diff.png"));
+    model::writeFlipPng(flip, staged.stage(out / "flip.png"));
+  }
   if (a.seeds_given) model::writePng(flicker, staged.stage(out / "flicker.png"));
+  const uint64_t peak_rss = peakResidentBytes();  // every image written: only the report is left
+  j["sim"]["memory"]["peak_rss_bytes"] = peak_rss;
   reports::writeJsonReport(staged.stage(out / "report.json"), j);
   staged.commit();
-  vcd.keep();
 
   if (a.quiet) return;
   fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
@@ -376,17 +567,35 @@ void runReplay(RunArgs& a) {
              timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
-  fmt::print("memory      {} B/pixel, {} of per-pixel state, {} read, {} written\n", algo->bytesPerPixel(),
-             humanBytes(double(run.result.state_bytes)), humanBytes(double(c.bytes_read)),
-             humanBytes(double(c.bytes_written)));
+  // The inserts' read-modify-writes at the ROP, not DRAM traffic (that is the
+  // timing summary's dram line); the A-buffer's pool nodes count at
+  // poolNodeBytes() each, as in the footprint.
+  fmt::print("memory      {} B/pixel, {} of per-pixel state{}; inserts read {} and write {} of it on chip (not DRAM)\n",
+             algo->bytesPerPixel(), humanBytes(double(run.result.state_bytes)),
+             algo->bounded() ? std::string()
+                             : fmt::format(" (heads + pool of {} B nodes)", algo->poolNodeBytes()),
+             humanBytes(double(c.bytes_read)), humanBytes(double(c.bytes_written)));
+  if (!algo->bounded() && c.discarded != 0)
+    fmt::print("            pool full: {} fragments dropped (abuffer.pool_bytes)\n", c.discarded);
+  fmt::print("resident    peak {} (estimated {}, budget {}){}\n", humanBytes(double(peak_rss)),
+             humanBytes(double(mem.peak())), humanBytes(double(budget.bytes)),
+             ref_bands > 1 ? fmt::format("; reference in {} bands ({} band file)", ref_bands,
+                                         humanBytes(double(band_file_bytes)))
+                           : std::string());
   if (timing) printTimingSummary(j);
-  fmt::print("image       vs abuffer: RMSE {:.6f}, PSNR {:.2f} dB, SSIM {:.5f}, max |err| {:.5f}, {} px > 1/255\n",
-             m.rmse, m.psnr, m.ssim, m.max_abs, m.pixels_over_1_255);
-  fmt::print("            FLIP at {:.2f} px/degree: mean {:.5f}, weighted median {:.5f}, max {:.5f} (flip.png)\n", a.ppd,
-             flip.stats.mean, flip.stats.weighted_median, flip.stats.max);
+  if (!compared) {
+    fmt::print("image       no reference (--reference none): no error metrics, no reference.pfm, diff.png or flip.png\n");
+  } else {
+    fmt::print("image       vs {}: RMSE {:.6f}, PSNR {:.2f} dB, SSIM {:.5f}, max |err| {:.5f}, {} px > 1/255\n",
+               shape.reference == ReferenceKind::File ? a.reference : "abuffer", m.rmse, m.psnr, m.ssim, m.max_abs,
+               m.pixels_over_1_255);
+    fmt::print("            FLIP at {:.2f} px/degree: mean {:.5f}, weighted median {:.5f}, max {:.5f} (flip.png)\n",
+               a.ppd, flip.stats.mean, flip.stats.weighted_median, flip.stats.max);
+  }
   if (a.seeds_given) printFlicker(j["image"]["flicker"]);
-  fmt::print("speed       {:.3f} s, {} fragments/s (reference {:.3f} s)\n", run.wall_seconds,
-             humanCount(run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0), ref.wall_seconds);
+  fmt::print("speed       {:.3f} s, {} fragments/s{}\n", run.wall_seconds,
+             humanCount(run.wall_seconds > 0.0 ? double(c.fragments_in) / run.wall_seconds : 0.0),
+             compared ? fmt::format(" (reference {:.3f} s)", ref.wall_seconds) : std::string());
   fmt::print("report      {}\n", (out / "report.json").string());
 }
 
@@ -407,13 +616,24 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--mode", a->mode, "timing (SystemC ROP: cycles, stalls, DRAM) or functional (image only, faster)")
       ->capture_default_str();
   cmd->add_option("--preset", a->preset,
-                  "ROP preset: igpu or dgpu (default igpu, or the --config file's \"preset\"; used in timing mode, "
-                  "validated in both)");
-  cmd->add_option("--config", a->config_file,
-                  "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
+                  "ROP preset: iris-pro-5200, titan-x-maxwell or navi21 (aliases igpu, dgpu; default "
+                  "iris-pro-5200, or the --config file's \"preset\"; used in timing mode, validated in both)");
+  CLI::Option* config = cmd->add_option(
+      "--config", a->config_file,
+      "JSON file of ROP parameters, applied over the preset (used in timing mode, validated in both)");
   cmd->add_option("--set", a->sets, "Override one ROP parameter, a.b.c=value (repeatable; see `oitsim config`)")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   CLI::Option* vcd = cmd->add_option("--vcd", a->vcd, "Write a VCD of key signals for GTKWave (timing mode only; the folder must exist)");
+  cmd->add_option("--reference", a->reference,
+                  "What the image is compared with: abuffer (the exact A-buffer, built in bands that fit the memory the "
+                  "rest of the run needs), none (no reference.pfm, diff.png or error metrics), or a PFM file of the "
+                  "frame's size, e.g. an earlier run's reference.pfm")
+      ->capture_default_str();
+  cmd->add_option("--memory-budget", a->memory_budget,
+                  fmt::format("Most memory the run may take, e.g. 8G, 512M or 60% (of physical memory); a frame that "
+                              "needs more is refused before any work (default {}% of physical memory, or of the "
+                              "cgroup's limit)",
+                              kDefaultBudgetPercent));
   cmd->add_option("--layers,-k", a->params.layers, "k: rows, nodes or layers per pixel")->capture_default_str();
   cmd->add_option("--format", a->format, "Row storage format: fp32, rgba8t8z32, fp16")->capture_default_str();
   cmd->add_option("--bits", a->params.bits, "slab: virtual coverage bits b; mlcb: coverage-mask bits")->capture_default_str();
@@ -435,13 +655,24 @@ void addRunCommand(CLI::App& app) {
       "--seeds", a->seeds,
       "Timing mode: replay the frame with N shader-latency seeds (input.seed, +1, ...) on every core; adds "
       "flicker.png and image.flicker (seed 0's run is the main image and report)");
-  cmd->callback([a, width, height, vcd, seeds] {
+  cmd->callback([a, width, height, vcd, config, seeds] {
     a->seeds_given = seeds->count() > 0;
     a->command_line = commandLine();
     a->vcd_given = vcd->count() > 0;
+    a->config_given = config->count() > 0;
     a->width_given = width->count() > 0;
     a->height_given = height->count() > 0;
-    runReplay(*a);
+    try {
+      runReplay(*a);
+    } catch (const std::bad_alloc&) {
+      // One line naming the frame, the algorithm and the memory it needed.
+      throw std::runtime_error(a->out_of_memory.empty() ? "out of memory" : a->out_of_memory);
+    } catch (const std::runtime_error& e) {
+      // A bad_alloc inside a SystemC process reaches us as SystemC's report.
+      if (!a->out_of_memory.empty() && std::string_view(e.what()).find("std::bad_alloc") != std::string_view::npos)
+        throw std::runtime_error(a->out_of_memory);
+      throw;
+    }
   });
 }
 

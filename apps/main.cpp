@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <stdlib.h>
 #include <exception>
+#include <new>
 
 #include "apps/Commands.hpp"
 #include "oit_rop/SystemcInfo.hpp"
@@ -91,6 +92,11 @@ extern "C" int sc_main(int argc, char* argv[]) {
     // One line naming the option, exit code 1, as for every other bad input.
     std::fflush(stdout);
     fmt::print(stderr, "oitsim: error: {} (see --help)\n", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // `run` names the frame and what it needed; elsewhere say at least what happened.
+    std::fflush(stdout);
+    fmt::print(stderr, "oitsim: error: out of memory: an allocation failed (check `ulimit -v` and the frame's size)\n");
     return 1;
   } catch (const std::exception& e) {
     // Subcommand callbacks throw on bad input; the message names file, offset or option.

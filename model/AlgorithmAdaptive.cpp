@@ -8,6 +8,8 @@
 // front, so each node keeps the per-pixel submission index (seq) of its
 // fragment; nodes are ordered by (z ascending, seq descending), i.e. a
 // later-submitted fragment is in front, and pass 1 recounts seq per pixel.
+#include <algorithm>
+#include <bit>
 #include <string>
 
 #include "model/AlgorithmDetail.hpp"
@@ -38,11 +40,14 @@ class Adaptive final : public OitAlgorithm {
     for (unsigned i = 3 * k_; i < 3 * k_ + 5; ++i) w[i] = 0;
   }
 
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext& ctx) override {
     // a = 0 changes nothing and is skipped in both passes before counting, so
     // the per-pixel seq numbers of the two passes agree.
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return pass == 0 ? build(w, f) : shade(w, f);
+    if (noContribution(f)) {
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
+    return pass == 0 ? build(w, f, ctx.work) : shade(w, f, ctx.work);
   }
 
   Rgb resolve(const uint32_t* w, Rgb bg) override {
@@ -54,16 +59,25 @@ class Adaptive final : public OitAlgorithm {
 
   // Pass 0 reads and writes the nodes and its counter; pass 1 reads the nodes,
   // the accumulator and its counter, and writes the accumulator and counter.
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (3 * k_ + 1) : 4 * (3 * k_ + 4);
+  // Words: nodes [0, 3k), accumulator [3k, 3k + 3), counters 3k + 3 (pass 0), 3k + 4 (pass 1).
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t nodes = 12 * k_;
+    return pass == 0 ? StateRanges::two(0, nodes, nodes + 12, nodes + 16)
+                     : StateRanges::two(0, nodes + 12, nodes + 16, nodes + 20);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (o == InsertOutcome::Discarded) return 0;
-    return pass == 0 ? 4 * (3 * k_ + 1) : 4 * 4;
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    if (o == InsertOutcome::Discarded) return StateRanges::none();
+    const uint32_t nodes = 12 * k_;
+    return pass == 0 ? StateRanges::two(0, nodes, nodes + 12, nodes + 16)
+                     : StateRanges::two(nodes, nodes + 12, nodes + 16, nodes + 20);
   }
 
  private:
-  InsertOutcome build(uint32_t* w, const Fragment& f) {
+  // Work: the position search compares nodes 0..p; the new node and every
+  // node behind it (shifted, vis rescaled) are written; a compression adds
+  // one removal metric per candidate node (k) and rewrites the nodes from the
+  // removed one (shifted, plus the predecessor's vis).
+  InsertOutcome build(uint32_t* w, const Fragment& f, InsertWork& work) {
     uint32_t& counter = w[3 * k_ + 3];
     const uint32_t seq = counter++;
     float z[kMaxLayers + 1], vis[kMaxLayers + 1];
@@ -83,6 +97,7 @@ class Adaptive final : public OitAlgorithm {
       vis[i] = vis[i - 1] * t;  // everything behind is attenuated by the new step
       sq[i] = sq[i - 1];
     }
+    unsigned compares = std::min(p + 1, n), moves = n - p + 1;
     z[p] = f.z;
     vis[p] = (p > 0 ? vis[p - 1] : 1.0f) * t;
     sq[p] = seq;
@@ -110,6 +125,8 @@ class Adaptive final : public OitAlgorithm {
           best = j;
         }
       }
+      compares += n - 1;
+      moves += n - best;
       vis[best - 1] = vis[best];
       for (unsigned j = best; j + 1 < n; ++j) {
         z[j] = z[j + 1];
@@ -124,22 +141,26 @@ class Adaptive final : public OitAlgorithm {
       w[3 * i + 1] = asWord(vis[i]);
       w[3 * i + 2] = sq[i];
     }
+    work = {uint8_t(std::min(255u, compares)), uint8_t(std::min(255u, moves))};
     return o;
   }
 
-  InsertOutcome shade(uint32_t* w, const Fragment& f) {
+  // Work: the nodes compared until the first one behind, one accumulator written.
+  InsertOutcome shade(uint32_t* w, const Fragment& f, InsertWork& work) {
     uint32_t& counter = w[3 * k_ + 4];
     const uint32_t seq = counter++;
     // vis just in front of the fragment: the last node that is nearer, or of
     // equal depth and submitted later (nodes are sorted that way).
     float v = 1.0f;
-    for (unsigned i = 0; i < k_; ++i) {
+    unsigned i = 0;
+    for (; i < k_; ++i) {
       const float zi = asFloat(w[3 * i]);
       if (zi < f.z || (zi == f.z && w[3 * i + 2] > seq))
         v = asFloat(w[3 * i + 1]);
       else
         break;
     }
+    work = {uint8_t(std::min(255u, std::min(i + 1, k_))), 1};
     uint32_t* acc = w + 3 * k_;
     const float va = v * f.a;
     acc[0] = asWord(asFloat(acc[0]) + va * f.r);

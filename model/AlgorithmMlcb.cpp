@@ -81,7 +81,11 @@ class Mlcb final : public OitAlgorithm {
     for (unsigned i = 0; i < k_; ++i) store(w, i, Layer{0, 0, 0, kInf, 0});
   }
 
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
+  // Work: the position search compares layers 0..p (their masks ORed); the
+  // new layer and every layer behind it (masks cleared, shifted) are
+  // rewritten, which includes the merged last layer.
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {
+    ctx.work = {0, 0};
     if (noContribution(f)) return InsertOutcome::Discarded;  // a = 0: common rule
     const uint64_t m = mlcbCoverageMask(f, b_, seed_);
     if (m == 0) return InsertOutcome::Discarded;  // rounded to no coverage: contributes nothing
@@ -93,6 +97,7 @@ class Mlcb final : public OitAlgorithm {
     uint64_t occl = 0;
     while (p < n && !(f.z <= L[p].z)) occl |= L[p++].m;
     const uint64_t mv = m & ~occl;
+    ctx.work.compares = uint8_t(std::min(p + 1, std::max(n, 1u)));
     // Fully hidden by nearer layers: it can never show (the coverage in front
     // of a depth only grows), so it takes no layer and nothing is written.
     if (mv == 0) return InsertOutcome::Discarded;
@@ -123,6 +128,7 @@ class Mlcb final : public OitAlgorithm {
       o = InsertOutcome::Merged;
     }
     for (unsigned i = p; i < k_; ++i) store(w, i, i < out ? L[i] : Layer{0, 0, 0, kInf, 0});
+    ctx.work.moves = uint8_t(std::max(n, out) - p);
     return o;
   }
 

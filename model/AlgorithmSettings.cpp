@@ -14,7 +14,7 @@ AlgorithmSettings algorithmSettings(std::string_view algorithm) {
     AlgorithmSettings uses;
   };
   static const Row kRows[] = {
-      {"abuffer", {}},
+      {"abuffer", {.format = true}},  // the node stores its colour in the format
       {"alpha", {.format = true}},
       {"mlab", {.layers = true, .format = true}},
       {"hybrid", {.layers = true, .format = true}},

@@ -55,9 +55,12 @@ class Slab final : public OitAlgorithm {
     w[acc_ + 4] = asWord(1.0f);  // T
   }
 
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;  // skipped before counting, both passes
-    return pass == 0 ? select(w, f) : colour(w, f);
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext& ctx) override {
+    if (noContribution(f)) {  // skipped before counting, both passes
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
+    return pass == 0 ? select(w, f, ctx.work) : colour(w, f, ctx.work);
   }
 
   Rgb resolve(const uint32_t* w, Rgb bg) override {
@@ -72,12 +75,18 @@ class Slab final : public OitAlgorithm {
     return finiteRgb(r + T * bg.r, g + T * bg.g, b + T * bg.b);
   }
 
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (3 * k_ + 2) : 4 * (3 * k_ + 5);
+  // Words: layers [0, 3k), then from acc_: U r, g, b, U1, T, counter pass 0, counter pass 1.
+  // Pass 0 reads and writes the layers, T and its counter (a Discarded
+  // fragment still writes T and the counter); pass 1 reads the layers, U, U1
+  // and its counter and writes U, U1 and the counter.
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t a = 4 * acc_;
+    return pass == 0 ? StateRanges::two(0, a, a + 16, a + 24) : StateRanges::two(0, a + 16, a + 24, a + 28);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (pass == 1) return o == InsertOutcome::Discarded ? 0 : 4 * 5;
-    return o == InsertOutcome::Discarded ? 4 * 2 : 4 * (3 * k_ + 2);  // T and counter always
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    const uint32_t a = 4 * acc_;
+    if (pass == 1) return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::two(a, a + 16, a + 24, a + 28);
+    return o == InsertOutcome::Discarded ? StateRanges::one(a + 16, a + 24) : StateRanges::two(0, a, a + 16, a + 24);
   }
 
   // P_b at real-valued (s, t), bilinear in the table (exact at integers).
@@ -111,7 +120,10 @@ class Slab final : public OitAlgorithm {
     return zl < z || (zl == z && seql > seq);
   }
 
-  InsertOutcome select(uint32_t* w, const Fragment& f) {
+  // Work: every stored layer is compared (its coverage in front is summed);
+  // T and the counter are written always, a kept fragment also rewrites the
+  // layers from its position (shifted ones and its own).
+  InsertOutcome select(uint32_t* w, const Fragment& f, InsertWork& work) {
     w[acc_ + 4] = asWord(asFloat(w[acc_ + 4]) * (1.0f - f.a));  // exact total T for the correction
     const uint32_t seq = w[acc_ + 5]++;
     // Layers are sorted by (z, later first); the new one is the latest.
@@ -125,6 +137,7 @@ class Slab final : public OitAlgorithm {
         else keep *= 1.0 - asFloat(w[3 * n + 1]);
       }
     }
+    work = {uint8_t(n), 1};
     if (p == k_) return InsertOutcome::Discarded;  // behind a full list
     uint32_t cov;
     if (mask_) {
@@ -142,6 +155,7 @@ class Slab final : public OitAlgorithm {
       if (!(xi < P)) return InsertOutcome::Discarded;
     }
     const unsigned last = std::min(n, k_ - 1);  // a full list drops its furthest layer
+    work.moves = uint8_t(std::min(255u, 2 + last - p));
     for (unsigned i = last; i > p; --i) {
       w[3 * i] = w[3 * (i - 1)];
       w[3 * i + 1] = w[3 * (i - 1) + 1];
@@ -153,18 +167,20 @@ class Slab final : public OitAlgorithm {
     return n == k_ ? InsertOutcome::Merged : InsertOutcome::Stored;  // Merged: furthest layer evicted
   }
 
-  InsertOutcome colour(uint32_t* w, const Fragment& f) {
+  // Work: the layers compared until the first one not in front, one accumulator written.
+  InsertOutcome colour(uint32_t* w, const Fragment& f, InsertWork& work) {
     const uint32_t seq = w[acc_ + 6]++;
     float vis;
+    unsigned i = 0;
     if (mask_) {
       uint32_t occl = 0;
-      for (unsigned i = 0; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) occl |= w[3 * i + 1];
+      for (; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) occl |= w[3 * i + 1];
       vis = 1.0f - float(std::popcount(occl)) / float(b_);
     } else {
       vis = 1.0f;
-      for (unsigned i = 0; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i)
-        vis *= 1.0f - asFloat(w[3 * i + 1]);
+      for (; i < k_ && inFront(asFloat(w[3 * i]), w[3 * i + 2], f.z, seq); ++i) vis *= 1.0f - asFloat(w[3 * i + 1]);
     }
+    work = {uint8_t(std::min(i + 1, k_)), 1};
     uint32_t* a = w + acc_;
     const float va = vis * f.a;
     a[0] = asWord(asFloat(a[0]) + va * f.r);

@@ -9,6 +9,8 @@
 // U1 = sum vis a; C = (U1 > 0 ? U (1 - T) / U1 : 0) + T C_bg.
 // Deviation: samples keep no submission index, so in pass 1 two fragments of
 // equal depth both count a sample holding that depth as visible.
+#include <algorithm>
+#include <bit>
 #include <string>
 
 #include "model/AlgorithmDetail.hpp"
@@ -31,19 +33,27 @@ class Stochastic final : public OitAlgorithm {
     w[s_] = asWord(1.0f);
     for (unsigned i = 1; i < 5; ++i) w[s_ + i] = 0;
   }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;
+  // Work: pass 0 depth-tests the round(a S) covered samples and writes the
+  // ones it wins plus T; pass 1 compares all S samples and writes one
+  // accumulator.
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned pass, const InsertContext& ctx) override {
+    if (noContribution(f)) {
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
     if (pass == 0) {
       w[s_] = asWord(asFloat(w[s_]) * (1.0f - f.a));
       const uint64_t m = coverage(f);
-      bool wrote = false;
+      unsigned wrote = 0;
       for (unsigned i = 0; i < s_; ++i)
         if ((m >> i & 1) && f.z <= asFloat(w[i])) {
           w[i] = asWord(f.z);
-          wrote = true;
+          ++wrote;
         }
+      ctx.work = {uint8_t(std::popcount(m)), uint8_t(wrote + 1)};
       return wrote ? InsertOutcome::Stored : InsertOutcome::Discarded;
     }
+    ctx.work = {uint8_t(s_), 1};
     unsigned visible = 0;
     for (unsigned i = 0; i < s_; ++i) visible += f.z <= asFloat(w[i]);
     const float va = float(visible) / float(s_) * f.a;
@@ -66,12 +76,17 @@ class Stochastic final : public OitAlgorithm {
     }
     return finiteRgb(r + T * bg.r, g + T * bg.g, b + T * bg.b);
   }
-  unsigned readBytes(unsigned pass, InsertOutcome) const override {
-    return pass == 0 ? 4 * (s_ + 1) : 4 * (s_ + 4);
+  // Words: sample depths [0, S), T at S, U r, g, b, U1 at S + 1 .. S + 4.
+  // Pass 0 reads and writes the depths and T (a Discarded fragment still
+  // writes T: a > 0); pass 1 reads the depths, U and U1 and writes U and U1.
+  StateRanges readRanges(unsigned pass, InsertOutcome) const override {
+    const uint32_t d = 4 * s_;
+    return pass == 0 ? StateRanges::one(0, d + 4) : StateRanges::two(0, d, d + 4, d + 20);
   }
-  unsigned writeBytes(unsigned pass, InsertOutcome o) const override {
-    if (pass == 1) return o == InsertOutcome::Discarded ? 0 : 16;
-    return o == InsertOutcome::Discarded ? 4 : 4 * (s_ + 1);  // T is always written (a > 0)
+  StateRanges writeRanges(unsigned pass, InsertOutcome o) const override {
+    const uint32_t d = 4 * s_;
+    if (pass == 1) return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::one(d + 4, d + 20);
+    return o == InsertOutcome::Discarded ? StateRanges::one(d, d + 4) : StateRanges::one(0, d + 4);
   }
 
  private:

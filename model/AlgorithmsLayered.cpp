@@ -66,6 +66,14 @@ class SortedRows : public OitAlgorithm {
     while (p < n_ && !(z <= asFloat(w[p * kRw + kRw - 1]))) ++p;
     return p;
   }
+  // The first empty row at or after `from` (n_ when none): rows are sorted
+  // with the empty ones last, so the occupied rows a shift from `from` moves
+  // are [from, firstEmpty(from)).
+  template <StorageFormat F>
+  unsigned firstEmpty(const uint32_t* w, unsigned from) const {
+    while (from < n_ && depth<F>(w, from) != kInf) ++from;
+    return from;
+  }
   template <StorageFormat F>
   static float depth(const uint32_t* w, unsigned row) {
     return asFloat(w[row * rowWords(F) + rowWords(F) - 1]);
@@ -122,6 +130,24 @@ class SortedRows : public OitAlgorithm {
     compositeAt<F>(w, r, g, b, T);
     return finiteRgb(r + bg.r * T, g + bg.g * T, b + bg.b * T);
   }
+  // Bytes the resolve of the rows reads: rows front to back up to the first
+  // empty row or the row that makes the transmittance exactly 0 (both
+  // included); the rows behind add exactly nothing, so stopping there gives
+  // the image compositeAt gives.
+  template <StorageFormat F>
+  unsigned resolvedRowBytes(const uint32_t* w) const {
+    constexpr unsigned kRw = rowWords(F);
+    float T = 1.0f;
+    for (unsigned i = 0; i < n_; ++i) {
+      const LayerRow row = loadRow(F, w + i * kRw);
+      T *= row.t;
+      if (row.z == kInf || T == 0.0f) return (i + 1) * 4 * kRw;
+    }
+    return n_ * 4 * kRw;
+  }
+  unsigned resolvedRowBytes(const uint32_t* w) const {
+    return withFormat([&](auto fmt) { return resolvedRowBytes<decltype(fmt)::value>(w); });
+  }
   using ResolveFn = Rgb (SortedRows::*)(const uint32_t*, Rgb) const;
   ResolveFn resolveRowsFn() const {
     return withFormat([](auto fmt) -> ResolveFn { return &SortedRows::resolveRowsAt<decltype(fmt)::value>; });
@@ -133,10 +159,19 @@ class SortedRows : public OitAlgorithm {
 
  private:
   template <class A, StorageFormat F>
-  static InsertOutcome insertVia(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext&) {
-    if (noContribution(f)) return InsertOutcome::Discarded;
-    return static_cast<const A&>(a).template insertAt<F>(w, f);
+  static InsertOutcome insertVia(OitAlgorithm& a, uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) {
+    if (noContribution(f)) {
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
+    return static_cast<const A&>(a).template insertAt<F>(w, f, ctx.work);
   }
+  // Work of a sorted insert (ALGORITHMS.md, "Work per insert"): the slot
+  // search compares rows 0..p (p + 1 rows, all n when it falls off the end).
+ protected:
+  uint8_t comparesTo(unsigned p) const { return uint8_t(std::min(255u, std::min(p + 1, n_))); }
+  static uint8_t count(unsigned n) { return uint8_t(std::min(255u, n)); }
+ private:
   InsertFn insert_ = nullptr;  // insertVia<the derived class, fmt_>
 };
 
@@ -151,6 +186,7 @@ class Mlab final : public SortedRows {
   std::string_view name() const override { return "mlab"; }
   void clear(uint32_t* w) override { clearRows(w); }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
+  unsigned resolveBytes(const uint32_t* w) const override { return resolvedRowBytes(w); }
 
  private:
   friend class SortedRows;  // pickInsert
@@ -159,24 +195,34 @@ class Mlab final : public SortedRows {
   // As in the bubble over decoded rows, the fragment's row takes part
   // unquantised: it is the row falling off when it lands behind every row,
   // and the merge target when it lands in the last row.
+  // Work: the slot search's compares; moves = the new row and the occupied
+  // rows shifted behind it (a full array: rows p..n-1, the merged last row
+  // among them), 1 for a merge into the last row.
   template <StorageFormat F>
-  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f, InsertWork& work) const {
     constexpr unsigned kRw = rowWords(F);
     const unsigned p = slot<F>(w, f.z);
     const LayerRow fr = fragmentRow(f);
     uint32_t* last = w + (n_ - 1) * kRw;
+    work.compares = comparesTo(p);
     if (p == n_) {  // behind every row
-      if (fr.z == kInf) return InsertOutcome::Stored;  // +inf falls off like an empty row
+      if (fr.z == kInf) {  // +inf falls off like an empty row
+        work.moves = 0;
+        return InsertOutcome::Stored;
+      }
       LayerRow l = loadRow(F, last);
       mergeBehind(l, fr);
       storeRow(F, l, last);
+      work.moves = 1;
       return InsertOutcome::Merged;
     }
     if (depth<F>(w, n_ - 1) == kInf) {  // an empty row falls off
+      work.moves = count(firstEmpty<F>(w, p) - p + 1);
       shiftRows<F>(w, p, n_ - 1);
       storeRow(F, fr, w + p * kRw);
       return InsertOutcome::Stored;
     }
+    work.moves = count(n_ - p);
     const LayerRow out = loadRow(F, last);
     LayerRow l = p == n_ - 1 ? fr : loadRow(F, last - kRw);  // row n-2 before the shift
     mergeBehind(l, out);
@@ -201,16 +247,32 @@ class KBuffer final : public SortedRows {
   std::string_view name() const override { return "kbuffer"; }
   void clear(uint32_t* w) override { clearRows(w); }
   Rgb resolve(const uint32_t* w, Rgb bg) override { return (this->*resolve_)(w, bg); }
+  unsigned resolveBytes(const uint32_t* w) const override { return resolvedRowBytes(w); }
+  // The rows are sorted, so the last row alone decides a rejection: a
+  // fragment not in front of it (!(z <= its depth)) lands behind every row.
+  // The insert reads that row first, so a Discarded insert (rejected, or
+  // a = 0) reads one row and writes none; the others read every row.
+  StateRanges readRanges(unsigned, InsertOutcome o) const override {
+    const uint32_t all = n_ * 4 * rw_;
+    return o == InsertOutcome::Discarded ? StateRanges::one(all - 4 * rw_, all) : StateRanges::one(0, all);
+  }
 
  private:
   friend class SortedRows;  // pickInsert
   // The bubble in place (see SortedRows); the furthest of k + 1 rows is dropped.
+  // Work: a rejection compares the last row only (the sorted rows' last row
+  // decides, as readRanges reads only it) and writes nothing; a kept fragment
+  // compares rows 0..p and writes its row and the occupied rows shifted behind it.
   template <StorageFormat F>
-  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f, InsertWork& work) const {
     const unsigned p = slot<F>(w, f.z);
     // The fragment itself was the furthest: nothing changes, nothing written.
-    if (p == n_) return InsertOutcome::Discarded;
+    if (p == n_) {
+      work = {1, 0};
+      return InsertOutcome::Discarded;
+    }
     const bool evicts = depth<F>(w, n_ - 1) != kInf;
+    work = {comparesTo(p), count(evicts ? n_ - p : firstEmpty<F>(w, p) - p + 1)};
     shiftRows<F>(w, p, n_ - 1);
     storeRow(F, fragmentRow(f), w + p * rowWords(F));
     // Merged: kept, but an older row was evicted to make room.
@@ -263,12 +325,16 @@ class Hybrid final : public SortedRows {
   // The bubble in place over the k - 1 core rows (see SortedRows). The row
   // falling off is the fragment's unquantised row when it lands behind every
   // row, else the old last row (z = +inf: empty, nothing to add).
+  // Work: the core's slot search; moves = its row and the occupied core rows
+  // shifted behind it, plus the tail when a row joins it.
   template <StorageFormat F>
-  InsertOutcome insertAt(uint32_t* w, const Fragment& f) const {
+  InsertOutcome insertAt(uint32_t* w, const Fragment& f, InsertWork& work) const {
     const unsigned p = slot<F>(w, f.z);
     const LayerRow fr = fragmentRow(f);
     LayerRow out = fr;
+    work = {comparesTo(p), 0};
     if (p < n_) {
+      work.moves = count(std::min(firstEmpty<F>(w, p) + 1, n_) - p);  // a full core: rows p..n-1
       out = kEmptyRow;
       if (depth<F>(w, n_ - 1) != kInf) out = loadRow(F, w + (n_ - 1) * rowWords(F));
       shiftRows<F>(w, p, n_ - 1);
@@ -282,6 +348,7 @@ class Hybrid final : public SortedRows {
     // first order instead of dropped. Only an empty row adds nothing.
     const float alpha = out.t != 1.0f ? 1.0f - out.t : std::max({out.r, out.g, out.b});
     if (alpha > 0.0f) {
+      work.moves = count(work.moves + 1u);
       HybridTail t = loadTail(w + tail_at_);
       t.r += out.r;
       t.g += out.g;
@@ -319,8 +386,12 @@ class Alpha final : public OitAlgorithm {
   }
   std::string_view name() const override { return "alpha"; }
   void clear(uint32_t* w) override { storeAcc(fmt_, {0, 0, 0, 1}, w); }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
-    if (noContribution(f)) return InsertOutcome::Discarded;
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {
+    if (noContribution(f)) {
+      ctx.work = {0, 0};
+      return InsertOutcome::Discarded;
+    }
+    ctx.work = {0, 1};  // one accumulator
     Rgba acc = loadAcc(fmt_, w);
     const float t = 1.0f - f.a;
     acc.r = f.a * f.r + t * acc.r;

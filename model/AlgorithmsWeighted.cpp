@@ -30,8 +30,10 @@ class Wsum final : public OitAlgorithm {
   }
   std::string_view name() const override { return "wsum"; }
   void clear(uint32_t* w) override { storeAcc(fmt_, {0, 0, 0, 0}, w); }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {
+    ctx.work = {0, 0};
     if (noContribution(f)) return InsertOutcome::Discarded;
+    ctx.work = {0, 1};  // one accumulator
     Rgba acc = loadAcc(fmt_, w);
     accumulate(acc, f, f.a);
     storeAcc(fmt_, acc, w);
@@ -61,8 +63,10 @@ class Wavg final : public OitAlgorithm {
     storeAcc(fmt_, {0, 0, 0, 0}, w);
     w[n_at_] = 0;
   }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {
+    ctx.work = {0, 0};
     if (noContribution(f)) return InsertOutcome::Discarded;
+    ctx.work = {0, 1};  // one accumulator
     Rgba acc = loadAcc(fmt_, w);
     accumulate(acc, f, f.a);
     storeAcc(fmt_, acc, w);
@@ -117,8 +121,10 @@ class Wboit final : public OitAlgorithm {
     storeAcc(fmt_, {0, 0, 0, 0}, w);
     storeR(w, 1.0f);
   }
-  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext&) override {
+  InsertOutcome insert(uint32_t* w, const Fragment& f, unsigned, const InsertContext& ctx) override {
+    ctx.work = {0, 0};
     if (noContribution(f)) return InsertOutcome::Discarded;
+    ctx.work = {0, 1};  // one accumulator
     // A += w (a c, a): the paper accumulates premultiplied colour times w(z, a),
     // which already holds a factor a (eq. 7-10), so a enters twice.
     const float wa = weight(f);

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <string>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
@@ -179,12 +180,52 @@ struct RenderResult {
   uint64_t state_bytes = 0;  // per-pixel state (W x H x bytesPerPixel) + pool
 };
 
+// renderInBands(): how much memory one band may take, and where the band
+// file goes when there is more than one band.
+struct BandOptions {
+  // Most bytes of one band's per-pixel words and pool (the A-buffer: 4 B per
+  // pixel, 24 B per fragment that reaches it).
+  uint64_t limit_bytes = uint64_t(1) << 30;
+  // Folder of the unnamed temporary band file (a frame in several bands).
+  std::string spill_dir = ".";
+};
+
+struct BandedRender {
+  RenderResult result;
+  unsigned bands = 1;
+  uint64_t largest_band_bytes = 0;  // per-pixel words + pool of the largest band
+  uint64_t spill_bytes = 0;         // size of the band file (0: one band, read from the trace)
+};
+
+// Splits the pixels (row-major) into consecutive ranges whose words
+// (bytes_per_pixel each) and pool (bytes_per_fragment per fragment counted at
+// the pixel) fit `limit`; returns the first pixel of each range. Throws
+// std::runtime_error when one pixel alone does not fit.
+std::vector<uint64_t> planBands(const std::vector<uint32_t>& fragments_per_pixel, uint32_t width,
+                                uint64_t bytes_per_pixel, uint64_t bytes_per_fragment, uint64_t limit);
+
 class FunctionalRenderer {
  public:
   explicit FunctionalRenderer(RenderOptions options = {}) : opt_(std::move(options)) {}
   // Throws std::runtime_error on a bad fragment (outside the frame, unknown
   // draw) and whatever the algorithm's beginFrame throws.
   RenderResult render(FragmentSource& src, OitAlgorithm& algo) const;
+
+  // render() of a single-pass algorithm (the A-buffer reference) in bands of
+  // pixels that each fit BandOptions::limit_bytes, so its pool never holds
+  // more than one band's fragments, whatever the trace's length:
+  //  - one band, read straight from the trace, when the whole frame fits
+  //    (the trace's fragment count bounds the pool; else a counting pass
+  //    decides);
+  //  - else one pass copies every fragment that reaches the algorithm into
+  //    its band's part of an unnamed temporary file in spill_dir (32 B per
+  //    fragment; it has no name, so it vanishes when closed, also when the
+  //    process is killed), and each band reads only its own part: time stays
+  //    linear in the fragments.
+  // The image is bit-identical to render()'s: every pixel gets the same
+  // fragments in the same order. Throws std::runtime_error when one pixel
+  // alone exceeds the limit or the folder lacks the disk space.
+  BandedRender renderInBands(FragmentSource& src, OitAlgorithm& algo, const BandOptions& bands) const;
 
  private:
   RenderOptions opt_;

@@ -32,11 +32,18 @@ void OitAlgorithm::clearFrame(uint32_t* words, size_t pixels) {
 
 std::string_view OitAlgorithm::passName(unsigned pass) const { return pass == 0 ? "insert" : "?"; }
 
+void StateRanges::add(uint32_t begin, uint32_t end) {
+  if (end <= begin) return;
+  if (count == kMax || (count && begin < range[count - 1].end))
+    throw std::logic_error("StateRanges::add: at most two increasing, disjoint ranges");
+  range[count++] = {begin, end};
+}
+
 // Default RMW: the whole state is read; a Discarded insert leaves it unchanged
 // and writes nothing, anything else writes the whole state back (upper bound).
-unsigned OitAlgorithm::readBytes(unsigned, InsertOutcome) const { return bytesPerPixel(); }
-unsigned OitAlgorithm::writeBytes(unsigned, InsertOutcome o) const {
-  return o == InsertOutcome::Discarded ? 0u : bytesPerPixel();
+StateRanges OitAlgorithm::readRanges(unsigned, InsertOutcome) const { return StateRanges::one(0, bytesPerPixel()); }
+StateRanges OitAlgorithm::writeRanges(unsigned, InsertOutcome o) const {
+  return o == InsertOutcome::Discarded ? StateRanges::none() : StateRanges::one(0, bytesPerPixel());
 }
 
 namespace {

@@ -46,11 +46,85 @@ struct StateLayout {
   unsigned words() const { return rows * rowWords(format) + extra_words; }
 };
 
+// The work one insert did inside its read-modify-write, in rows (nodes,
+// layers, samples): what the timing model's BlendAlu charges cycles for
+// (ALGORITHMS.md, "Work per insert"). Counts saturate at 255.
+struct InsertWork {
+  uint8_t compares = 0;  // rows whose depth (or removal metric) was compared with the fragment's
+  uint8_t moves = 1;     // rows written: the new row, rows shifted or rescaled behind it, a merged row,
+                         // an accumulator; 0 when nothing was written
+};
+
+// Byte ranges of a pixel's state, in the state's own order (row i of the
+// layout at i x rowBytes(format), the extra words after the rows): at most
+// two, increasing and disjoint. What one insert reads or writes
+// (OitAlgorithm::readRanges / writeRanges); the timing model turns them into
+// the cache lines and sectors the insert touches.
+struct StateRanges {
+  struct Range {
+    uint32_t begin = 0, end = 0;  // [begin, end), bytes
+  };
+  static constexpr unsigned kMax = 2;
+  Range range[kMax]{};
+  unsigned count = 0;
+
+  static StateRanges none() { return {}; }
+  static StateRanges one(uint32_t begin, uint32_t end) {
+    StateRanges r;
+    r.add(begin, end);
+    return r;
+  }
+  static StateRanges two(uint32_t b0, uint32_t e0, uint32_t b1, uint32_t e1) {
+    StateRanges r;
+    r.add(b0, e0);
+    r.add(b1, e1);
+    return r;
+  }
+  // Appends [begin, end) (an empty range is dropped); ranges must come in increasing order.
+  void add(uint32_t begin, uint32_t end);
+  unsigned bytes() const {
+    unsigned n = 0;
+    for (unsigned i = 0; i < count; ++i) n += range[i].end - range[i].begin;
+    return n;
+  }
+};
+
 // Per-fragment information the ROP has besides the fragment itself.
 struct InsertContext {
   // Final opaque depth at the pixel, +inf where no opaque fragment landed.
   // The caller has already culled fragments at or behind it.
   float opaque_z = std::numeric_limits<float>::infinity();
+  // Written by insert() (an output beside the outcome: one store, no change to
+  // the insert's signature). Algorithms that write one accumulator leave the
+  // caller's {0, 1}; the sorted ones say how far they searched and shifted.
+  mutable InsertWork work;
+};
+
+// The A-buffer under test's budgets (abuffer.* of the ROP configuration,
+// CONFIG.md). All zero: unlimited, the exact reference.
+enum class ABufferOverflow : uint8_t { Spill, Truncate };
+struct ABufferBudget {
+  // Heads (4 B per pixel) + node pool, bytes; 0: sized by nodes_per_pixel.
+  uint64_t pool_bytes = 0;
+  // Pool nodes per pixel of the frame when pool_bytes is 0; 0 with pool_bytes 0: unlimited.
+  double nodes_per_pixel = 0.0;
+  // The resolve's local array (nodes sorted per pixel); 0: unlimited.
+  unsigned max_sorted = 0;
+  // A list longer than max_sorted: Spill sorts it all (exact, at a cost per
+  // spilled node), Truncate composites only the first max_sorted nodes of the
+  // list (the newest: it runs newest first) and ignores the rest.
+  ABufferOverflow overflow = ABufferOverflow::Spill;
+  bool unlimited() const { return pool_bytes == 0 && nodes_per_pixel == 0.0 && max_sorted == 0; }
+};
+
+// What the resolve of one pixel's list did (A-buffer): the timing model's list
+// walk and sort (ALGORITHMS.md, abuffer).
+struct ResolveWork {
+  uint32_t nodes = 0;     // nodes in the list (dependent reads of the walk)
+  uint32_t sorted = 0;    // nodes loaded into the local array and sorted
+  uint32_t spilled = 0;   // nodes beyond the local array (Spill: sorted too, at a cost; Truncate: ignored)
+  uint64_t compares = 0;  // insertion sort's compares over the sorted nodes
+  uint64_t moves = 0;     // insertion sort's element moves
 };
 
 struct AlgorithmParams {
@@ -61,6 +135,7 @@ struct AlgorithmParams {
   bool coverage_mask = false;                // slab: b-bit coverage masks instead of continuous alpha
   int weight = 10;                           // wboit: weight equation 7, 8, 9 or 10
   uint64_t seed = 1;                         // random streams (slab, stochastic, mlcb)
+  ABufferBudget abuffer;                     // abuffer: pool and local-array budgets (default: unlimited)
   // Overrides the trace header's camera planes (wboit eq. 7-9 need them).
   std::optional<CameraPlanes> camera;
 };
@@ -112,13 +187,41 @@ class OitAlgorithm {
   virtual Rgb resolve(const uint32_t* words, Rgb background) = 0;
 
   // Bytes of per-pixel memory one insert reads / writes (the ROP's RMW).
-  virtual unsigned readBytes(unsigned pass, InsertOutcome o) const;
-  virtual unsigned writeBytes(unsigned pass, InsertOutcome o) const;
+  // Default: the bytes of readRanges / writeRanges (the A-buffer adds the
+  // node it appends to its pool).
+  virtual unsigned readBytes(unsigned pass, InsertOutcome o) const { return readRanges(pass, o).bytes(); }
+  virtual unsigned writeBytes(unsigned pass, InsertOutcome o) const { return writeRanges(pass, o).bytes(); }
+  // Which bytes of the pixel's state one insert with outcome `o` reads and
+  // writes, as ranges (an upper bound where the bytes depend on the state,
+  // e.g. the rows a sorted insert shifts). Default: the whole state read; the
+  // whole state written, nothing when Discarded.
+  virtual StateRanges readRanges(unsigned pass, InsertOutcome o) const;
+  virtual StateRanges writeRanges(unsigned pass, InsertOutcome o) const;
+  // Bytes from the start of the state the resolve reads for this pixel's
+  // final state (default: all of them). Sorted rows stop after the first
+  // empty row or the row that made the transmittance exactly 0: the rows
+  // behind it add nothing (the image is the same whether or not they are read).
+  virtual unsigned resolveBytes(const uint32_t* words) const { return bytesPerPixel(); }
 
   // False for the A-buffer (unbounded lists in its own pool).
   virtual bool bounded() const { return true; }
   // Bytes held outside the per-pixel words (A-buffer pool), 0 otherwise.
   virtual uint64_t poolBytes() const { return 0; }
+  // A-buffer: bytes of one pool node (colour in the storage format, depth,
+  // next pointer), 0 otherwise; the pool's capacity in nodes for the frame of
+  // the last beginFrame() (UINT64_MAX: unlimited).
+  virtual unsigned poolNodeBytes() const { return 0; }
+  virtual uint64_t poolCapacityNodes() const { return 0; }
+  // A-buffer: what resolve() of this pixel walks and sorts; zero otherwise.
+  virtual ResolveWork resolveWork(const uint32_t* words) const { return {}; }
+  // Bytes of the pool per stored fragment (the A-buffer's node), 0 for the
+  // bounded algorithms: the memory estimate and the banded reference use it.
+  virtual uint64_t poolBytesPerFragment() const { return 0; }
+  // Makes room in the pool for this many stored fragments at once, so it does
+  // not grow by doubling (which can take up to three times the nodes' bytes
+  // while it copies). Call it before beginFrame(), which keeps the room (a
+  // larger reservation drops the nodes held). No effect on bounded algorithms.
+  virtual void reservePool(uint64_t fragments) {}
 
  protected:
   void setLayout(StateLayout l) {
@@ -143,6 +246,12 @@ const std::vector<AlgorithmInfo>& algorithmNames();
 // Throws std::invalid_argument naming the valid values on an unknown name or
 // an out-of-range parameter.
 std::unique_ptr<OitAlgorithm> makeAlgorithm(std::string_view name, const AlgorithmParams& params);
+
+// The A-buffer pool's capacity in nodes for a width x height frame: (pool_bytes
+// - 4 W H) / node_bytes, or nodes_per_pixel x W x H when pool_bytes is 0;
+// UINT64_MAX when both are 0 (unlimited). Throws std::invalid_argument naming
+// abuffer.pool_bytes when it cannot hold the heads and one node.
+uint64_t capacityNodes(const ABufferBudget& b, uint32_t width, uint32_t height, unsigned node_bytes);
 
 // Deterministic random bits of one fragment: a hash of (x, y, draw, prim,
 // seed, stream); no generator state, so any pass or any order gives the same

@@ -13,9 +13,26 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
       cfg_(*setup.cfg),
       clock_(setup.cfg->clock.core_mhz),
       dram_("dram", setup.cfg->dram, setup.cfg->clock.core_mhz) {
+  // The shared levels, from the DRAM up: l3 behind l2 (a victim l3 gets the
+  // l2's evictions), the first of them the partitions' entry.
+  const RopConfig& c = *setup.cfg;
+  // Partitions run up to a quantum apart; a level's later requests (an l2 miss
+  // after its lookup) a little further: the ports keep twice that and more.
+  const Cycle lookback = 2 * std::max<Cycle>(1, c.sim.quantum_cycles) + 4096;
+  MemoryPort* below = &dram_.entry();
+  if (c.l2.size_bytes != 0) {
+    if (c.l3.size_bytes != 0) {
+      l3_ = std::make_unique<CacheLevel>("l3", c.l3, lookback, *below, nullptr, c.stats.level_miss_classes);
+      below = l3_.get();
+    }
+    l2_ = std::make_unique<CacheLevel>("l2", c.l2, lookback, *below,
+                                       l3_ && c.l3.victim_only ? l3_.get() : nullptr, c.stats.level_miss_classes);
+    dram_.setEntry(*l2_);
+  }
   const unsigned n = setup.geo->partitions;
   for (unsigned i = 0; i < n; ++i) {
-    parts_.push_back(std::make_unique<RopPartition>(fmt::format("partition{}", i).c_str(), i, setup, dram_.memory()));
+    parts_.push_back(std::make_unique<RopPartition>(fmt::format("partition{}", i).c_str(), i, setup, dram_.entry(),
+                                                    dram_.memory()));
     parts_.back()->dram.bind(dram_.target);  // multi-passthrough: one binding per partition
     done_list_ |= parts_.back()->doneEvent();
   }

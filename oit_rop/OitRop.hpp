@@ -1,5 +1,6 @@
 // OitRop: the top sc_module of the timing model: N RopPartitions (screen
-// tiles interleaved, FrameGeometry) sharing one DramSystem, plus a sampler
+// tiles interleaved, FrameGeometry) sharing one DramSystem (the shared cache
+// levels l2 and l3, when configured, in front of the DRAM), plus a sampler
 // process that records the time series every stats.interval_cycles and, when
 // a VCD path is given, traces a few key values (sc_trace).
 #pragma once
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/RopPartition.hpp"
 
@@ -29,6 +31,9 @@ class OitRop : public sc_core::sc_module {
   ~OitRop() override;
 
   DramSystem& dram() { return dram_; }
+  // The shared cache levels (null when not configured).
+  const CacheLevel* l2() const { return l2_.get(); }
+  const CacheLevel* l3() const { return l3_.get(); }
   unsigned partitionCount() const { return unsigned(parts_.size()); }
   const RopPartition& partition(unsigned i) const { return *parts_[i]; }
   const std::vector<TimeSample>& samples() const { return samples_; }
@@ -43,6 +48,7 @@ class OitRop : public sc_core::sc_module {
   const RopConfig& cfg_;
   CoreClock clock_;
   DramSystem dram_;
+  std::unique_ptr<CacheLevel> l3_, l2_;  // built before the partitions, which reach them
   std::vector<std::unique_ptr<RopPartition>> parts_;
   sc_core::sc_event_or_list done_list_;
   std::vector<TimeSample> samples_;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <stdexcept>
 
@@ -15,12 +16,11 @@ namespace oit::rop {
 namespace {
 constexpr unsigned kResolvePrefetch = 8;  // tiles whose lines are fetched ahead of the resolve
 constexpr Cycle kPostedWindow = 1024;     // posted DRAM writes may run this far ahead
-constexpr uint32_t kNodeBytes = 12;       // A-buffer node as published: rgba8 + z32 + next32
 uint8_t dummy_data[1];
 }  // namespace
 
 RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup,
-                           MemorySystem& memory)
+                           MemoryPort& shared, MemorySystem& memory)
     : sc_module(name),
       dram("dram"),
       id_(id),
@@ -34,17 +34,20 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
       early_(cfg_.early_depth, cfg_.input.fragments_per_clock, setup.map.tile4_bytes, setup.map.depth, *this,
              EarlyDepth::kDepthTiles, geo_.local),
       lock_(cfg_.lock),
-      cache_(cfg_.cache, setup.map.line_bytes, geo_.tiles(), setup.map.blend_arrays, memory, cfg_.skip.fast_clear,
-             geo_.local),
-      alu_(cfg_.alu, setup.format_rate, std::max(1u, setup.array_rows)),
+      cache_(cfg_.cache,
+             TileLines{setup.layout->lineBytes(), setup.layout->sectorBytes(), setup.layout->linesPerTile()},
+             geo_.tiles(), setup.map.blend_arrays, shared, cfg_.skip.fast_clear, geo_.local, cfg_.stats.miss_classes),
+      alu_(cfg_.alu, setup.format_rate),
       tok_(cfg_.lock.capacity),
       cache_q_(256),
-      tail_q_(256) {
+      tail_q_(256),
+      memory_(memory) {
   cache_ports_ = std::max(1u, unsigned(std::ceil(double(cfg_.alu.blends_per_clock))));
+  tile_mask_ = (1u << geo_.tile_shift) - 1;
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
-  for (unsigned o = 0; o < model::kOutcomeCount; ++o)
-    rows_of_[o] = uint8_t(BlendAlu::rowsFor(model::InsertOutcome(o), s_.array_rows, cfg_.skip.lazy_merge));
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
+  miss_rest_ = cfg_.l2.size_bytes || cfg_.l3.size_bytes ? RootCause::L2 : RootCause::RopCacheMiss;
+  root_.setBusShare([&memory](Cycle from, Cycle to) { return memory.busShare(from, to); });
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
@@ -78,9 +81,11 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   payload_.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
   const sc_core::sc_time at = clock_.time(now), stamp = sc_core::sc_time_stamp();
   sc_core::sc_time delay = at > stamp ? at - stamp : sc_core::SC_ZERO_TIME;
+  memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
   if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
 
@@ -121,7 +126,7 @@ void RopPartition::opaquePhase() {
   // Without fast clear every blending-array tile is written clear at frame start.
   if (!cfg_.skip.fast_clear)
     for (uint32_t t : owned_)
-      access(now_, s_.map.blend_arrays + uint64_t(t) * s_.map.line_bytes, s_.map.line_bytes, true,
+      access(now_, s_.map.blend_arrays + uint64_t(t) * s_.map.tile_stride, s_.map.tile_stride, true,
              Surface::BlendArrays);
   const uint64_t n = front_.opaquePerPartition()[id_];
   if (n == 0) return;
@@ -130,6 +135,7 @@ void RopPartition::opaquePhase() {
   // where an opaque fragment landed are written once, spread over the phase.
   const Cycle start = now_;
   const Cycle cycles = Cycle(std::ceil(double(n) / cfg_.input.fragments_per_clock));
+  root_.set(now_, RootCause::Input);  // the pre-pass at the input rate
   std::vector<uint32_t> landed;
   for (uint32_t t : owned_)
     if (front_.opaqueLanded()[t] != 0) landed.push_back(t);
@@ -148,8 +154,8 @@ void RopPartition::opaquePhase() {
 void RopPartition::nodeWrite() {
   // Nodes are appended to the partition's pool region; consecutive appends
   // coalesce into burst-sized DRAM writes.
-  node_pending_ += kNodeBytes;
-  res_.node_bytes_written += kNodeBytes;
+  node_pending_ += s_.node_bytes;
+  res_.node_bytes_written += s_.node_bytes;
   const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
   while (node_pending_ >= burst) {
     access(now_, node_addr_, burst, true, Surface::BlendArrays);
@@ -165,6 +171,58 @@ void RopPartition::waitForFrontEnd() {
   wait(front_.drained());
   const Cycle t = clock_.cycle(sc_core::sc_time_stamp());
   if (t > now_) advance(t, false);
+}
+
+// The A-buffer resolve's list walk over one tile (Yang et al. 2010): every
+// pixel follows its list from the head, each node's read waiting for the
+// previous node's pointer, so a list of n nodes is n dependent reads; the
+// tile's pixels walk side by side (one read per pixel and step, each node
+// scattered in the pool, a burst of its own). Then each pixel sorts what it
+// loaded (insertion sort, abuffer.sort_cycles_per_*; nodes past
+// abuffer.max_sorted spill at abuffer.spill_cycles_per_node, or are ignored
+// with truncate).
+RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready) {
+  const FrontEnd::PixelState px = front_.pixelState();
+  const uint32_t tx = tile % geo_.tiles_x, ty = tile / geo_.tiles_x;
+  const uint32_t x0 = tx * geo_.tile_w, y0 = ty * geo_.tile_h;
+  const uint32_t x1 = std::min(geo_.width, x0 + geo_.tile_w), y1 = std::min(geo_.height, y0 + geo_.tile_h);
+  const ABufferConfig& ab = cfg_.abuffer;
+  walk_levels_.clear();
+  ListWalk w;
+  for (uint32_t y = y0; y < y1; ++y)
+    for (uint32_t x = x0; x < x1; ++x) {
+      const model::ResolveWork rw = px.algo->resolveWork(px.words + (size_t(y) * px.width + x) * px.words_per_pixel);
+      // The algorithm's own budget decides (the CLI builds it from abuffer.*):
+      // truncate walks and sorts max_sorted nodes, spill all of them.
+      const uint32_t walked = rw.sorted;
+      const uint32_t spilled = rw.sorted == rw.nodes ? rw.spilled : 0;
+      if (walk_levels_.size() < walked) walk_levels_.resize(walked, 0);
+      for (uint32_t i = 0; i < walked; ++i) ++walk_levels_[i];
+      const Cycle sort = Cycle(rw.compares) * ab.sort_cycles_per_compare + Cycle(rw.moves) * ab.sort_cycles_per_move +
+                         Cycle(spilled) * ab.spill_cycles_per_node;
+      w.sort_cycles = std::max(w.sort_cycles, sort);
+      res_.list_nodes_walked += walked;
+      res_.sort_cycles += sort;
+    }
+  // Step i reads the i-th node of every pixel whose list is that long, once
+  // step i - 1's reads are back; each read is its own burst at a scattered
+  // address of the pool.
+  const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
+  const uint64_t pool_span = uint64_t(1) << 35;
+  Cycle t = heads_ready;
+  for (size_t i = 0; i < walk_levels_.size(); ++i) {
+    Cycle step = t;
+    for (uint32_t j = 0; j < walk_levels_[i]; ++j) {
+      const uint64_t h = (uint64_t(tile) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(i) << 20 | j) * 0xBF58476D1CE4E5B9ull;
+      const uint64_t addr = s_.map.node_pool + ((h >> 16) % pool_span) / burst * burst;
+      step = std::max(step, access(t, addr, std::min(burst, s_.node_bytes), false, Surface::BlendArrays));
+      res_.node_bytes_read += s_.node_bytes;
+    }
+    res_.list_walk_cycles += step - t;
+    t = step;
+  }
+  w.ready = t;
+  return w;
 }
 
 void RopPartition::resolvePhase() {
@@ -188,12 +246,28 @@ void RopPartition::resolvePhase() {
   size_t next_issue = 0;
   bool computing = false;
   uint32_t computing_tile = 0;
-  Cycle compute_done = 0;
+  Cycle compute_done = 0, sort_done = 0;
+  // The issuing tile's lines, the next to read and when those read so far
+  // are there. Each line read stays pinned until its tile's resolve is done
+  // (as a fragment's until its blend), so fills in flight never exceed the
+  // cache's lines: the pinned lines of the issuing tile, of each prefetched
+  // tile (in pf's order) and of the tile being resolved.
+  std::vector<LineTouch> lines;
+  size_t line_next = 0;
+  Cycle lines_ready = 0;
+  WaitSplit lines_wait;  // the wait of the tile's line that is ready last (root causes)
+  bool issuing = false;
+  std::vector<LineTouch> issuing_pins, computing_pins;
+  std::deque<std::vector<LineTouch>> pf_pins;
+  const auto unpin = [&](uint32_t tile, std::vector<LineTouch>& pins) {
+    if (!pins.empty() && cache_.release(tile, pins)) retry_at_ = 0;  // a set-refused line may go now
+    pins.clear();
+  };
   for (;;) {
     const Cycle now = now_;
     bool moved = false;
     if (computing && now >= compute_done) {
-      releaseLine(computing_tile);
+      unpin(computing_tile, computing_pins);
       access(now, s_.map.colour + uint64_t(computing_tile) * s_.map.tile4_bytes, s_.map.tile4_bytes, true,
              Surface::Resolve);
       computing = false;
@@ -203,30 +277,81 @@ void RopPartition::resolvePhase() {
     unsigned acquired = 0;
     bool refused = false;
     while (next_issue < tiles.size() && pf.size() < kResolvePrefetch && acquired < cache_ports_) {
-      Cycle r = 0;
-      if (!acquireGated(now, tiles[next_issue], false, r)) {
+      // A tile's lines are read as one issue (one cache port); when the miss
+      // queue lacks entries for the rest, they follow once entries free.
+      const uint32_t t = tiles[next_issue];
+      if (!issuing) {
+        resolveLines(t, lines);
+        line_next = 0;
+        lines_ready = now;
+        lines_wait = WaitSplit{now, now, now, RootCause::RopCacheMiss};
+        issuing = true;
+      }
+      if (now < retry_at_) {
         refused = true;
         break;
       }
-      // The tile's other inputs are fetched with its line, and the resolve of
+      while (line_next < lines.size()) {
+        const std::span<const LineTouch> line(&lines[line_next], 1);
+        memory_.resetProbe();
+        const uint64_t misses = cache_.stats().misses;
+        const Cycle r = cache_.acquire(now, t, line);
+        if (r == kNever) {
+          if (!cache_.refusedBySet()) {
+            retry_at_ = cache_.missQueueFreesAt();
+          } else if (pf.empty() && !computing && !issuing_pins.empty()) {
+            // Only this tile's own lines hold the set (more of its lines in
+            // one set than ways): they were read, so they go, and the read goes on.
+            unpin(t, issuing_pins);
+            continue;
+          } else {
+            retry_at_ = kNever;  // until a resolved tile's lines are released
+          }
+          refused = true;
+          break;
+        }
+        issuing_pins.push_back(lines[line_next]);
+        if (r > lines_ready) {
+          lines_ready = r;
+          // A miss: its memory; a hit under a fill in flight: the latest miss's.
+          lines_wait = cache_.stats().misses != misses ? splitWait(now, r, memory_.probe(), miss_rest_)
+                       : r > now + cfg_.cache.hit_latency ? last_miss_
+                                                           : WaitSplit{now, now, now, RootCause::RopCacheMiss};
+          if (cache_.stats().misses != misses) last_miss_ = lines_wait;
+        }
+        ++line_next;
+      }
+      if (refused) break;
+      issuing = false;
+      pf_pins.push_back(std::move(issuing_pins));
+      issuing_pins.clear();
+      // The tile's other inputs are fetched with its lines, and the resolve of
       // the tile waits for all of them: the opaque colour it composites over
       // (where an opaque fragment landed) and, for the A-buffer, its node
       // lists (every node of the tile read once).
-      const uint32_t t = tiles[next_issue];
-      Cycle data = r;
-      if (front_.opaqueLanded()[t] != 0)
-        data = std::max(data, access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes,
-                                     false, Surface::Colour));
-      if (!s_.bounded) {
-        const uint64_t nodes = front_.tileNodes()[t];
-        if (nodes) {
-          const uint64_t bytes = nodes * kNodeBytes;
-          data = std::max(data, access(now, s_.map.node_pool + (uint64_t(id_) << 36) + (uint64_t(t) << 12) % (uint64_t(1) << 35),
-                                       uint32_t(std::min<uint64_t>(bytes, 0xFFFFFFFFu)), false, Surface::BlendArrays));
-          res_.node_bytes_read += bytes;
+      Cycle data = lines_ready;
+      // The wait's root causes follow the input that arrives last.
+      WaitSplit wait = lines_wait;
+      auto input = [&](Cycle ready) {
+        if (ready > data) {
+          data = ready;
+          wait = splitWait(now, ready, memory_.probe(), miss_rest_);
         }
+      };
+      if (front_.opaqueLanded()[t] != 0)
+        input(access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour));
+      Cycle sort = 0;
+      if (!s_.bounded && front_.tileNodes()[t] != 0) {
+        // The list walk's reads depend on each other: the chain, not a
+        // resource, holds the tile (root cause list_walk).
+        const ListWalk w = walkLists(t, data);
+        if (w.ready > data) {
+          wait = splitWait(now, w.ready, DramProbe{}, RootCause::ListWalk);
+          data = w.ready;
+        }
+        sort = w.sort_cycles;
       }
-      pf.push({t, data});
+      pf.push({t, data, sort, wait});
       ++next_issue;
       ++acquired;
       moved = true;
@@ -237,23 +362,39 @@ void RopPartition::resolvePhase() {
         window_blocked = true;
       } else {
         const uint32_t t = pf.front().tile;
+        const Cycle sort = pf.front().sort;
         pf.pop();
+        computing_pins = std::move(pf_pins.front());
+        pf_pins.pop_front();
         uint64_t work = geo_.tilePixels();
-        if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // list traversal
+        if (!s_.bounded) work = std::max<uint64_t>(work, front_.tileNodes()[t]);  // composite every node
         computing = true;
         computing_tile = t;
-        compute_done = now + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
+        // The A-buffer's pixels sort side by side: the tile waits for its slowest sort.
+        sort_done = now + sort;
+        compute_done = sort_done + std::max<Cycle>(1, Cycle(std::ceil(double(work) / px_per_clock)));
         moved = true;
       }
     }
     if (!computing && pf.empty() && next_issue == tiles.size()) break;
-    if (computing) setStatus(Stage::Resolve, StageStatus::busy());
-    else if (window_blocked) setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-    else setStatus(Stage::Resolve, StageStatus::stall(Stall::CacheMissWait));
+    // Root causes: the A-buffer's per-pixel sort, then the resolve's compute
+    // at the blend rate; a tile's inputs wait for memory (or its list walk);
+    // a refused acquire for the latest miss.
+    if (computing) {
+      const bool sorting = now < sort_done;
+      setStatus(Stage::Resolve, sorting ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
+      root_.set(now, sorting ? RootCause::Sort : RootCause::Alu);
+    } else if (window_blocked) {
+      setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+      root_.set(now, RootCause::DramBandwidth);
+    } else {
+      setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
+      root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
+    }
     Cycle next = now + 1;
     if (!moved && cfg_.skip.idle_cycles) {
       next = kNever;
-      if (computing) next = std::min(next, compute_done);
+      if (computing) next = std::min(next, now < sort_done ? sort_done : compute_done);
       if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
       if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
       if (refused) next = std::min(next, retry_at_);
@@ -262,9 +403,11 @@ void RopPartition::resolvePhase() {
     }
     advance(next, true);
   }
-  // The frame ends when the last posted write reached DRAM.
+  // The frame ends when the last posted write reached DRAM: the DRAM
+  // controller writes what its write queues still hold (MEMORY.md).
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-  const Cycle end = std::max(now_, last_write_done_);
+  root_.set(now_, RootCause::DramBandwidth);  // the posted writes still queued
+  const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);
@@ -272,6 +415,28 @@ void RopPartition::resolvePhase() {
       while (now_ < end) advance(now_ + 1, true);
   }
   setStatus(Stage::Resolve, StageStatus::idle());
+}
+
+void RopPartition::resolveLines(uint32_t t, std::vector<LineTouch>& out) {
+  // The sectors holding the bytes the resolve reads of each pixel (its
+  // final state: resolveBytes), of the lines this frame wrote (fast clear:
+  // the others hold the clear value, known on chip).
+  const ArrayLayout& layout = *s_.layout;
+  resolve_fill_.assign(layout.linesPerTile(), 0);
+  const uint32_t tx = t % geo_.tiles_x, ty = t / geo_.tiles_x;
+  const uint32_t words = s_.algo->stateWords();
+  const uint32_t* state = front_.state().data();
+  for (uint32_t i = 0; i < geo_.tilePixels(); ++i) {
+    const uint32_t x = tx * geo_.tile_w + i % geo_.tile_w, y = ty * geo_.tile_h + i / geo_.tile_w;
+    if (x >= geo_.width || y >= geo_.height) continue;
+    const uint32_t* w = state + (size_t(y) * geo_.width + x) * words;
+    layout.addPrefixRead(i, s_.algo->resolveBytes(w), resolve_fill_.data());
+  }
+  out.clear();
+  for (uint32_t l = 0; l < layout.linesPerTile(); ++l) {
+    const uint32_t fill = resolve_fill_[l] & (cfg_.skip.fast_clear ? cache_.writtenSectors(t, l) : ~0u);
+    if (fill) out.push_back({l, fill, 0});
+  }
 }
 
 void RopPartition::run() {
@@ -283,6 +448,8 @@ void RopPartition::run() {
     cycle_->run();
   resolvePhase();
   flushAccounts();
+  root_.account(now_);
+  res_.root_causes = root_.cycles();
   res_.end = now_;
   // Bring SystemC time up to the partition's end (it may run up to a quantum
   // ahead): the sampler samples while any partition runs, so without this the

@@ -21,13 +21,16 @@
 #include <vector>
 
 #include "oit_rop/stages/BlendAlu.hpp"
+#include "oit_rop/memory/ArrayLayout.hpp"
 #include "oit_rop/stages/BlendArrayRmw.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/stages/EarlyDepth.hpp"
+#include "oit_rop/stages/NodeCounter.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/stages/PixelLock.hpp"
 #include "oit_rop/stages/ShaderInput.hpp"
+#include "oit_rop/RootCause.hpp"
 #include "oit_rop/TimingStats.hpp"
 
 namespace oit::rop {
@@ -35,10 +38,10 @@ namespace oit::rop {
 class CycleEngine;
 class ApproximateEngine;
 
-// DRAM address map of the frame's surfaces (tile-linear).
+// Address map of the frame's surfaces (tile-linear; MEMORY.md).
 struct AddressMap {
   uint64_t blend_arrays = 0, depth = 0, colour = 0, node_pool = 0;
-  uint32_t line_bytes = 0;   // one tile of blending arrays (A-buffer: heads)
+  uint32_t tile_stride = 0;  // one tile of blending arrays (A-buffer: heads), whole cache lines (ArrayLayout)
   uint32_t tile4_bytes = 0;  // one tile of a 4 B/pixel surface
 };
 
@@ -46,10 +49,15 @@ struct PartitionSetup {
   const RopConfig* cfg = nullptr;
   const FrameGeometry* geo = nullptr;
   FrontEnd* front = nullptr;
+  const model::OitAlgorithm* algo = nullptr;  // resolveBytes (what the resolve reads)
+  const ArrayLayout* layout = nullptr;        // where the arrays' bytes are
+  const FragmentLines* lines = nullptr;       // the lines each insert touches
   AddressMap map;
-  unsigned array_rows = 0;   // layout rows (for rowsFor)
+  unsigned array_rows = 0;   // layout rows (BlendAlu::chargedWork without lazy merging)
   double format_rate = 1.0;  // BlendAlu throughput factor
   bool bounded = true;       // false: A-buffer node pool traffic
+  unsigned node_bytes = 12;  // A-buffer: one pool node (OitAlgorithm::poolNodeBytes)
+  NodeCounter* counter = nullptr;  // A-buffer: the GPU's node counter (shared by all partitions)
 };
 
 struct PartitionResult {
@@ -61,7 +69,11 @@ struct PartitionResult {
   uint64_t fragments = 0, culled_early = 0, culled_late = 0, blended = 0;
   uint64_t tiles_resolved = 0, tiles_skipped_fast_clear = 0;
   uint64_t node_bytes_written = 0, node_bytes_read = 0;
+  // A-buffer resolve: nodes read by the list walks, cycles tiles waited for
+  // them (the dependent reads' latency), sort cycles summed over pixels.
+  uint64_t list_nodes_walked = 0, list_walk_cycles = 0, sort_cycles = 0;
   uint64_t merges_skipped = 0;   // Stored inserts that did not pay the merge (lazy)
+  RootCauseAccount::Cycles root_causes{};  // every cycle up to `end` by root cause (RootCause.hpp)
 };
 
 class RopPartition : public sc_core::sc_module, public MemoryPort {
@@ -69,7 +81,11 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   tlm_utils::simple_initiator_socket<RopPartition> dram;
 
   SC_HAS_PROCESS(RopPartition);
-  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemorySystem& memory);
+  // `shared`: the first shared memory level (l2, else DRAM), for the cache's fills and write-backs.
+  // `shared`: the first level below the ROP cache (l2, else DRAM); `memory`:
+  // the DRAM controller, whose write queues the partition drains at its end.
+  RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup, MemoryPort& shared,
+               MemorySystem& memory);
   ~RopPartition() override;
 
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
@@ -99,18 +115,27 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   // fragment carries from issue to release, indexed by its scoreboard token,
   // and the queues after the lock.
   struct TokenInfo {
-    uint32_t tile;
-    uint8_t flags, outcome, rows;
+    uint32_t pixel;  // in tile order (InRec::pixel)
+    uint8_t flags, outcome;  // outcome: InRec's kind (culled: kCulledKind)
+    model::InsertWork work;  // as charged (BlendAlu::chargedWork)
   };
   struct CacheEntry {  // a fragment between lock entry and its blend slot
     uint32_t token;
     Cycle ready;  // its line is there
     bool miss;
+    WaitSplit wait;  // a miss: its wait by root cause
   };
   struct ResolveEntry {
     uint32_t tile;
     Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there
+    Cycle sort;   // A-buffer: the tile's slowest per-pixel sort, cycles
+    WaitSplit wait;  // what the tile's inputs waited for (root causes)
   };
+  struct ListWalk {
+    Cycle ready = 0;        // the last node of the tile's longest list is read
+    Cycle sort_cycles = 0;  // the tile's slowest pixel sort
+  };
+  ListWalk walkLists(uint32_t tile, Cycle heads_ready);
 
   void run();
   // now_ = next, skip count, quantum keeper. Inline (with the helpers below):
@@ -150,9 +175,17 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   void opaquePhase();
   void waitForFrontEnd();
   void resolvePhase();
+  // The lines (and sectors) the resolve of tile t reads.
+  void resolveLines(uint32_t t, std::vector<LineTouch>& out);
+  uint32_t tileOf(uint32_t pixel) const { return pixel >> geo_.tile_shift; }
+  // The lines a fragment of this pass touches (FragmentLines): kind = InRec's.
+  std::span<const LineTouch> linesOf(uint32_t pixel, uint8_t kind) const {
+    const FragmentLines::Span l = s_.lines->lines(pass_, kind & (FragmentLines::kKinds - 1), pixel & tile_mask_);
+    return {l.begin, l.count};
+  }
   // BlendArrayCache::release, re-enabling a set-refused retry.
-  void releaseLine(uint32_t tile) {
-    if (cache_.release(tile)) retry_at_ = 0;  // the refused access's set has a line out of use now
+  void releaseLines(uint32_t pixel, uint8_t kind) {
+    if (cache_.release(tileOf(pixel), linesOf(pixel, kind))) retry_at_ = 0;  // the refused access's set has a line out of use now
   }
   void nodeWrite();
   void refillInput() {
@@ -160,8 +193,9 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     while (q.empty() && front_.canRefill()) front_.refill();
     starving_ = q.empty() && !front_.exhausted();
   }
-  // BlendArrayCache::acquire, not called before retry_at_ (false: refused; ready: when the line is there).
-  bool acquireGated(Cycle now, uint32_t tile, bool write, Cycle& ready) {
+  // BlendArrayCache::acquire of a fragment's lines, not called before
+  // retry_at_ (false: refused; ready: when the lines are there).
+  bool acquireGated(Cycle now, uint32_t pixel, uint8_t kind, Cycle& ready) {
     // While every miss-queue entry is busy a retry would be refused again: no call
     // until the first entry frees, so the refusals counted (cache.miss_queue_full:
     // one per access that had to wait) and the cycle the access goes through do
@@ -169,8 +203,16 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
     // A set with every way in use is retried after the release that frees one
     // of its lines (releaseLine), also independent of how often we ask.
     if (now < retry_at_) return false;
-    ready = cache_.acquire(now, tile, write);
-    if (ready != kNever) return true;
+    memory_.resetProbe();
+    const uint64_t misses = cache_.stats().misses;
+    ready = cache_.acquire(now, tileOf(pixel), linesOf(pixel, kind));
+    if (ready != kNever) {
+      // A miss waits for memory (a fast-clear fill for the cache alone); a
+      // hit under a fill in flight for that fill, which the partition's
+      // latest miss stands for.
+      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
+      return true;
+    }
     retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
     return false;
   }
@@ -196,10 +238,17 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   Fifo<CacheEntry> cache_q_;
   Fifo<std::pair<Cycle, uint32_t>> tail_q_;  // EndOfShader releases
   Cycle retry_at_ = 0;  // after a refused acquire: the cycle the cache's first miss-queue entry frees (kNever: until a line of the set is released)
+  uint32_t tile_mask_;  // tile pixels - 1
   unsigned cache_ports_;              // cache accesses per cycle (ceil(alu.blends_per_clock))
   bool early_cull_;
   bool merge_skip_;                   // a Stored insert skips the merge (lazy, > 1 row)
-  std::array<uint8_t, 4> rows_of_{};  // BlendAlu::rowsFor by outcome (index 3: invalid, 0 rows)
+  // The work a fragment's blend is charged: its insert's (BlendAlu::chargedWork).
+  model::InsertWork charged(model::InsertWork w, uint8_t outcome) const {
+    return BlendAlu::chargedWork(w, model::InsertOutcome(outcome & 3), s_.array_rows, cfg_.skip.lazy_merge);
+  }
+  // When a blend's work can start: at `now`, or (A-buffer, a stored node) when
+  // the node counter's atomic returns.
+  Cycle blendStart(Cycle now, bool appends) { return appends ? s_.counter->grant(now) : now; }
   unsigned pass_ = 0;
   Cycle now_ = 0, next_sync_ = 0;
   std::vector<uint32_t> owned_;  // tiles of this partition
@@ -207,9 +256,16 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   std::array<Cycle, kStageCount> since_{};  // cycle the current status_[i] began
   uint64_t codes_ = 0;                      // status_ packed, byte i = code(status_[i])
   bool starving_ = false;
+  RootCauseAccount root_;     // this partition's cycles by root cause
+  WaitSplit last_miss_;       // the latest blend-array miss's wait (root causes)
+  WaitSplit last_depth_;      // the latest depth-tile read's wait
+  RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
+  std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
   // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
   uint64_t node_pending_ = 0, node_addr_ = 0;
+  std::vector<uint32_t> walk_levels_;  // walkLists: pixels of the tile with a list at least i + 1 long
   Cycle last_write_done_ = 0;
+  MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
   // The transparent passes' engine: one of the two (sim.engine).
   std::unique_ptr<CycleEngine> cycle_;

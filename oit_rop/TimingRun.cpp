@@ -9,9 +9,14 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 #include <stdexcept>
 #include <tlm>
+#include <unordered_map>
 
+#include "oit_rop/Bottleneck.hpp"
+#include "oit_rop/memory/ArrayLayout.hpp"
+#include "oit_rop/memory/CacheLevel.hpp"
 #include "oit_rop/stages/BlendAlu.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/OitRop.hpp"
@@ -88,6 +93,72 @@ json bySurface(const std::array<uint64_t, kSurfaceCount>& v) {
   return j;
 }
 
+// An insert gets all its lines or waits (BlendArrayCache::acquire), so the
+// cache must have a miss-queue entry for each and the ways for those that
+// share a set.
+void checkCacheServesInserts(const RopConfig& cfg, const CacheGeometry& g, const FragmentLines& lines,
+                             const model::OitAlgorithm& algo) {
+  const char* layout = cfg.memory.array_layout == ArrayLayoutKind::RowMajor ? "row_major" : "pixel_major";
+  if (lines.maxLines() > cfg.cache.miss_queue)
+    throw std::invalid_argument(fmt::format(
+        "cache.miss_queue ({}) is smaller than the {} cache lines one {} insert touches ({} bytes per pixel, "
+        "memory.array_layout {}, cache.line_bytes {}): an insert gets all its lines or waits, so it could never "
+        "start; raise cache.miss_queue or cache.line_bytes",
+        cfg.cache.miss_queue, lines.maxLines(), algo.name(), algo.bytesPerPixel(), layout, cfg.cache.line_bytes));
+  const uint32_t in_set = lines.maxLinesInOneSet(g.sets);
+  if (in_set > g.ways)
+    throw std::invalid_argument(fmt::format(
+        "one {} insert touches {} lines of one set of the cache but a set has {} ways (cache.ways {}, {} sets; "
+        "memory.array_layout {}): it could never get them all; raise cache.ways or cache.size_bytes, or use "
+        "pixel_major",
+        algo.name(), in_set, g.ways, cfg.cache.ways, g.sets, layout));
+}
+
+// One cache level's figures for memory.levels[] (report.json).
+json levelJson(const std::string& name, const LevelStats& l, bool classified) {
+  const uint64_t accesses = LevelStats::total(l.accesses), hits = LevelStats::total(l.hits);
+  json by = json::object();
+  for (unsigned i = 0; i < kSurfaceCount; ++i)
+    by[surfaceKey(Surface(i))] = {{"accesses", l.accesses[i]},       {"hits", l.hits[i]},
+                                  {"misses", l.misses[i]},           {"read_bytes", l.read_bytes[i]},
+                                  {"write_bytes", l.write_bytes[i]}, {"fill_bytes", l.fill_bytes[i]},
+                                  {"writeback_bytes", l.writeback_bytes[i]}, {"writebacks", l.writebacks[i]}};
+  json j = {{"name", name},
+          {"accesses", accesses},
+          {"hits", hits},
+          {"misses", LevelStats::total(l.misses)},
+          {"hit_rate", accesses ? double(hits) / double(accesses) : 0.0},
+          {"read_bytes", LevelStats::total(l.read_bytes)},
+          {"write_bytes", LevelStats::total(l.write_bytes)},
+          {"fill_bytes", LevelStats::total(l.fill_bytes)},
+          {"writeback_bytes", LevelStats::total(l.writeback_bytes)},
+          {"writebacks", LevelStats::total(l.writebacks)},
+          {"victims_in", l.victims_in},
+          {"miss_classes", classified},
+          {"by_surface", by}};
+  // Not classified (stats.level_miss_classes off): no split at all, not zeros.
+  if (classified) {
+    j["compulsory_misses"] = l.compulsory_misses;
+    j["capacity_misses"] = l.capacity_misses;
+    j["conflict_misses"] = l.conflict_misses;
+  }
+  return j;
+}
+
+// Bytes still dirty somewhere in the hierarchy at the frame's end, per
+// surface: each byte once, whichever levels hold it (the upper level's copy
+// first: it is the newer one). The ranges of all levels are multiples of
+// `unit` bytes, aligned.
+std::array<uint64_t, kSurfaceCount> endDirtyBytes(const std::vector<std::vector<DirtyRange>>& by_level, uint32_t unit) {
+  std::unordered_map<uint64_t, Surface> held;  // unit address -> surface
+  for (const auto& ranges : by_level)
+    for (const DirtyRange& r : ranges)
+      for (uint64_t a = r.addr / unit * unit; a < r.addr + r.bytes; a += unit) held.emplace(a, r.surface);
+  std::array<uint64_t, kSurfaceCount> bytes{};
+  for (const auto& [addr, surface] : held) bytes[unsigned(surface)] += unit;
+  return bytes;
+}
+
 }  // namespace
 
 std::string vcdFilePath(const std::string& path) {
@@ -126,9 +197,12 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   const model::DrawClassifier classes(h);
   algo.beginFrame(h);
   const FrameGeometry geo(h.width, h.height, cfg.partitions, cfg.lock.granularity);
-  const uint32_t line_bytes = geo.tilePixels() * algo.bytesPerPixel();  // one tile of the algorithm's arrays
-  // The tile cache must hold one line: refused here, before any work, with the option to change.
-  cacheGeometry(cfg.cache, line_bytes);
+  // Where the arrays live and which lines each insert touches; refused here,
+  // before any work, when the cache could never serve an insert.
+  const ArrayLayout layout(algo.layout(), algo.bytesPerPixel(), geo.tilePixels(), cfg.memory.array_layout,
+                           cfg.cache.line_bytes, cfg.cache.sector_bytes);
+  const FragmentLines lines(algo, layout, geo.tilePixels());
+  checkCacheServesInserts(cfg, cacheGeometry(cfg.cache, cfg.cache.line_bytes), lines, algo);
   if (opt.progress) opt.progress(0.0, "opaque");
   // The opaque phase's work per partition, counted in the same read.
   std::vector<uint64_t> opaque_per_part(geo.partitions, 0);
@@ -140,10 +214,10 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
 
   // Address map: tile-linear surfaces, each 1 MiB aligned.
   AddressMap map;
-  map.line_bytes = line_bytes;
+  map.tile_stride = layout.tileStride();
   map.tile4_bytes = geo.tilePixels() * 4;
   map.blend_arrays = 0;
-  map.depth = alignUp(uint64_t(geo.tiles()) * map.line_bytes, 1u << 20);
+  map.depth = alignUp(uint64_t(geo.tiles()) * map.tile_stride, 1u << 20);
   map.colour = map.depth + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
   map.node_pool = map.colour + alignUp(uint64_t(geo.tiles()) * map.tile4_bytes, 1u << 20);
 
@@ -151,10 +225,20 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   setup.cfg = &cfg;
   setup.geo = &geo;
   setup.front = &front;
+  setup.algo = &algo;
+  setup.layout = &layout;
+  setup.lines = &lines;
   setup.map = map;
   setup.array_rows = algo.layout().rows;
   setup.format_rate = BlendAlu::formatRate(cfg.alu, algo.layout());
   setup.bounded = algo.bounded();
+  setup.node_bytes = algo.poolNodeBytes();
+  // The A-buffer's global node counter: one atomic unit for every partition.
+  std::unique_ptr<NodeCounter> counter;
+  if (!algo.bounded()) {
+    counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency);
+    setup.counter = counter.get();
+  }
 
   const CoreClock clock(cfg.clock.core_mhz);
   tlm::tlm_global_quantum::instance().set(clock.time(std::max<uint64_t>(1, cfg.sim.quantum_cycles)));
@@ -181,9 +265,13 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   uint64_t node_w = 0, node_r = 0;
   LockStats lock{};
   CacheStats cache{};
+  uint64_t arrays_written = 0;             // the ROP caches' written sectors, in bytes
+  std::vector<DirtyRange> dirty_rop;       // the ROP caches' dirty sectors at the end
+  std::vector<std::vector<DirtyRange>> dirty_by_level(1);
   EarlyDepthStats depth{};
   AluStats alu{};
   std::vector<uint64_t> part_frags;
+  std::vector<PartitionPhases> phases;
   uint64_t lost_updates = 0;
   for (unsigned i = 0; i < n; ++i) {
     const RopPartition& p = top->partition(i);
@@ -207,6 +295,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                      {"fragments", r.fragments}, {"stages", stages},
                      {"skipped_idle_cycles", r.skipped_idle}, {"lock_peak_occupancy", p.lockStats().peak_occupancy}});
     part_frags.push_back(r.fragments);
+    phases.push_back({r.opaque_end, r.end, r.pass_end, r.root_causes});
     skipped += r.skipped_idle;
     culled_early += r.culled_early;
     culled_late += r.culled_late;
@@ -223,23 +312,17 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     lock.out_of_order_entries += l.out_of_order_entries;
     lock.entries += l.entries;
     lock.peak_occupancy = std::max(lock.peak_occupancy, l.peak_occupancy);
-    const CacheStats& c = p.cache().stats();
-    cache.accesses += c.accesses;
-    cache.hits += c.hits;
-    cache.misses += c.misses;
-    cache.clear_fills += c.clear_fills;
-    cache.evictions += c.evictions;
-    cache.writebacks += c.writebacks;
-    cache.miss_queue_full += c.miss_queue_full;
-    cache.set_in_use += c.set_in_use;
-    cache.peak_misses_in_flight = std::max(cache.peak_misses_in_flight, c.peak_misses_in_flight);
+    cache += p.cache().stats();
+    arrays_written += p.cache().writtenBytes();
+    p.cache().dirtyRanges(dirty_rop);
     const EarlyDepthStats& d = p.earlyDepth().stats();
     depth.tested += d.tested;
     depth.depth_reads += d.depth_reads;
     depth.depth_buffer_hits += d.depth_buffer_hits;
     depth.hiz_decided += d.hiz_decided;
     alu.blends += p.alu().stats().blends;
-    alu.rows += p.alu().stats().rows;
+    alu.compares += p.alu().stats().compares;
+    alu.moves += p.alu().stats().moves;
     alu.dropped += p.alu().stats().dropped;
     // lock.mode unordered / none: the outcomes were decided at lock entry.
     if (const BlendArrayRmw* rmw = p.rmw()) {
@@ -285,6 +368,7 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                     {"blended", rc.stored},
                     {"merged", rc.merged},
                     {"discarded", rc.discarded},
+                    {"dropped_pool_full", algo.bounded() ? 0 : rc.discarded},
                     {"outcomes_sum_to_in", rc.balanced()},
                     {"per_partition", part_frags},
                     {"pass_outcomes", pass_outcomes},
@@ -330,26 +414,105 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
     for (size_t i = sampled; i < bus.size(); ++i) rest += bus[i];
     series.push_back({{"cycle", cycles}, {"dram_bytes", rest}, {"scoreboard_occupancy", 0}, {"lock_waiters", 0}});
   }
+  // What bounds the frame: root causes, utilisation per resource, phases.
+  ResourceWork work;
+  work.input_fragments = double(rc.opaque) + double(std::accumulate(part_frags.begin(), part_frags.end(), uint64_t(0)));
+  work.input_rate = cfg.input.fragments_per_clock;
+  work.depth_tests = double(depth.tested);
+  for (size_t i = 0; i < sampled; ++i) work.mean_occupancy += double(top->samples()[i].occupancy);
+  work.mean_occupancy = sampled ? work.mean_occupancy / double(sampled) : 0.0;
+  work.lock_capacity = cfg.lock.capacity;
+  work.cache_accesses = double(cache.accesses);
+  work.cache_ports = std::max(1.0, std::ceil(double(cfg.alu.blends_per_clock)));
+  work.alu_work = double(alu.blends + alu.dropped) + double(tiles_resolved) * double(geo.tilePixels());
+  work.alu_rate = double(cfg.alu.blends_per_clock) * setup.format_rate;
+  for (Cycle b : ms.channel_busy) work.dram_busy_cycles += double(b);
+  work.dram_channels = double(ms.channel_busy.size());
+  auto port_bytes = [](const LevelStats& s) {
+    return double(LevelStats::total(s.read_bytes) + LevelStats::total(s.write_bytes));
+  };
+  if (top->l2()) {
+    work.l2_bytes = port_bytes(top->l2()->stats());
+    work.l2_per_clock = cfg.l2.bytes_per_clock * cfg.l2.slices;
+  }
+  if (top->l3()) {
+    work.l3_bytes = port_bytes(top->l3()->stats());
+    work.l3_per_clock = cfg.l3.bytes_per_clock * cfg.l3.slices;
+  }
+  timing.update(bottleneckJson(phases, cycles, work));
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;
   if (bus.size() <= 1) peak_gbps = mean_gbps;  // shorter than one interval
   peak_gbps = std::max(peak_gbps, mean_gbps);
 
-  uint32_t touched_tiles = 0, landed_tiles = 0;
+  uint32_t landed_tiles = 0, landed_resolved = 0;
   for (uint32_t t = 0; t < geo.tiles(); ++t) {
-    // Without fast clear every tile's arrays are written clear at frame start.
-    if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++touched_tiles;
-    if (front.opaqueLanded()[t]) ++landed_tiles;
+    if (!front.opaqueLanded()[t]) continue;
+    ++landed_tiles;
+    // Resolved tiles: every one without fast clear, else those a fragment wrote.
+    if (!cfg.skip.fast_clear || top->partition(geo.partitionOf(t)).cache().touched(t)) ++landed_resolved;
   }
   const uint64_t wh = uint64_t(h.width) * h.height;
-  const uint64_t nodes = algo.bounded() ? 0 : rc.stored;
-  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + 12 * nodes},
+  // A-buffer: heads + the pool as allocated (all of it when preallocated);
+  // its nodes are node_pool_bytes_written, poolNodeBytes() each.
+  // The arrays' bytes written: the sectors the inserts wrote, or (no fast
+  // clear) every tile's, written clear at frame start; the A-buffer's nodes.
+  const uint64_t arrays_touched =
+      (cfg.skip.fast_clear ? arrays_written : uint64_t(geo.tiles()) * map.tile_stride) + node_w;
+  json allocated = {{"blend_arrays", algo.bounded() ? wh * algo.bytesPerPixel() : 4 * wh + algo.poolBytes()},
                     {"depth", 4 * wh},
                     {"colour", 4 * wh},
                     {"resolve", 0}};
-  json touched = {{"blend_arrays", uint64_t(touched_tiles) * map.line_bytes + (algo.bounded() ? 0 : 12 * nodes)},
+  json touched = {{"blend_arrays", arrays_touched},
                   {"depth", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"colour", uint64_t(landed_tiles) * map.tile4_bytes},
                   {"resolve", tiles_resolved * map.tile4_bytes}};
+  // Compulsory traffic (MEMORY.md): what a perfect, infinite cache would
+  // still move: every byte the frame writes leaves the chip once (written back
+  // when evicted, or still dirty at the end); nothing is read that the frame
+  // did not write first (a resolve-written colour tile counts as resolve).
+  std::array<uint64_t, kSurfaceCount> compulsory{};
+  compulsory[unsigned(Surface::BlendArrays)] = arrays_touched;
+  compulsory[unsigned(Surface::Depth)] = uint64_t(landed_tiles) * map.tile4_bytes;
+  compulsory[unsigned(Surface::Colour)] = uint64_t(landed_tiles - landed_resolved) * map.tile4_bytes;
+  compulsory[unsigned(Surface::Resolve)] = tiles_resolved * map.tile4_bytes;
+  // Left dirty at the end, in the ROP caches and the shared levels: moved later
+  // (when evicted), so counted beside the frame's DRAM bytes against compulsory.
+  uint32_t unit = layout.sectorBytes();
+  dirty_by_level[0] = std::move(dirty_rop);
+  for (const CacheLevel* l : {top->l2(), top->l3()}) {
+    if (!l) continue;
+    dirty_by_level.emplace_back();
+    l->dirtyRanges(dirty_by_level.back());
+    unit = std::min(unit, l->sectorBytes());
+  }
+  const std::array<uint64_t, kSurfaceCount> end_dirty = endDirtyBytes(dirty_by_level, unit);
+  uint64_t compulsory_total = 0, end_dirty_total = 0;
+  for (unsigned i = 0; i < kSurfaceCount; ++i) {
+    compulsory_total += compulsory[i];
+    end_dirty_total += end_dirty[i];
+  }
+  const uint64_t moved = ms.readBytes() + ms.writeBytes() + end_dirty_total;
+  json levels = json::array();
+  {
+    const uint64_t rop_misses = cache.misses;
+    json rop = {{"name", "rop_cache"},
+                {"accesses", cache.accesses},
+                {"hits", cache.hits},
+                {"misses", rop_misses},
+                {"hit_rate", cache.hitRate()},
+                {"read_bytes", cache.read_bytes},
+                {"write_bytes", cache.write_bytes},
+                {"fill_bytes", cache.fill_bytes},
+                {"writeback_bytes", cache.writeback_bytes},
+                {"writebacks", cache.writebacks},
+                {"miss_classes", cfg.stats.miss_classes},
+                {"compulsory_misses", cache.compulsory_misses},
+                {"capacity_misses", cache.capacity_misses},
+                {"conflict_misses", cache.conflict_misses}};
+    levels.push_back(rop);
+    if (top->l2()) levels.push_back(levelJson("l2", top->l2()->stats(), top->l2()->classifiesMisses()));
+    if (top->l3()) levels.push_back(levelJson("l3", top->l3()->stats(), top->l3()->classifiesMisses()));
+  }
   json memory = {{"dram_read_bytes", bySurface(ms.read_bytes)},
                  {"dram_write_bytes", bySurface(ms.write_bytes)},
                  {"requests", ms.requests},
@@ -360,7 +523,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"channel_peak_gbps", channel_peak_gbps},
                  {"node_pool_bytes_written", node_w},
                  {"node_pool_bytes_read", node_r},
-                 {"footprint", {{"allocated", allocated}, {"touched", touched}}}};
+                 {"footprint", {{"allocated", allocated}, {"touched", touched}}},
+                 {"compulsory_bytes", bySurface(compulsory)},
+                 {"end_dirty_bytes", bySurface(end_dirty)},
+                 {"traffic_over_compulsory", compulsory_total ? double(moved) / double(compulsory_total) : 0.0},
+                 {"levels", levels}};
   json lockj = {{"conflicts", lock.conflicts},
                 {"wait_cycles", lock.wait_cycles},
                 {"longest_wait", lock.longest_wait},
@@ -375,7 +542,15 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"clear_fills", cache.clear_fills},     {"evictions", cache.evictions},
                  {"writebacks", cache.writebacks},       {"miss_queue_full", cache.miss_queue_full},
                  {"set_in_use", cache.set_in_use},
-                 {"peak_misses_in_flight", cache.peak_misses_in_flight}, {"line_bytes", map.line_bytes}};
+                 {"peak_misses_in_flight", cache.peak_misses_in_flight},
+                 {"sector_misses", cache.sector_misses},
+                 {"hits_under_miss", cache.hits_under_miss},
+                 {"line_bytes", layout.lineBytes()},
+                 {"sector_bytes", layout.sectorBytes()},
+                 {"lines_per_tile", layout.linesPerTile()},
+                 {"tile_stride_bytes", layout.tileStride()},
+                 {"array_layout", cfg.memory.array_layout == ArrayLayoutKind::RowMajor ? "row_major" : "pixel_major"},
+                 {"max_lines_per_insert", lines.maxLines()}};
   json skips = {{"early_depth_culled", culled_early},
                 {"late_culled", culled_late},
                 {"tiles_skipped_fast_clear", tiles_skipped},
@@ -386,7 +561,11 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
                  {"depth_tile_reads", depth.depth_reads},
                  {"depth_buffer_hits", depth.depth_buffer_hits},
                  {"hiz_decided", depth.hiz_decided}};
-  json alu_j = {{"blends", alu.blends}, {"rows", alu.rows}, {"dropped", alu.dropped}};
+  json alu_j = {{"blends", alu.blends}, {"compares", alu.compares}, {"moves", alu.moves}, {"dropped", alu.dropped}};
+  if (counter)
+    alu_j["node_counter"] = {{"atomics", counter->atomics()},
+                             {"wait_cycles", counter->waitCycles()},
+                             {"atomics_per_clock", cfg.abuffer.atomics_per_clock}};
   json per_draw = json::object();
   std::vector<uint32_t> ids;
   for (const auto& [id, _] : front.perDraw()) ids.push_back(id);

@@ -43,6 +43,19 @@ void checkVcdWritable(const std::string& path);
 
 // Errors of the trace (TraceError: file, byte offset, record, field) come out as
 // thrown by the reader, whether they happen before or during the simulation.
+// The A-buffer under test's budgets from the ROP configuration (abuffer.*):
+// what makeAlgorithm("abuffer", ...) takes in both modes, so a functional run
+// drops and truncates exactly as the timing run does.
+inline model::ABufferBudget abufferBudget(const ABufferConfig& c) {
+  model::ABufferBudget b;
+  b.pool_bytes = c.pool_bytes;
+  b.nodes_per_pixel = c.nodes_per_pixel;
+  b.max_sorted = c.max_sorted;
+  b.overflow = c.overflow == ABufferOverflowPolicy::Truncate ? model::ABufferOverflow::Truncate
+                                                              : model::ABufferOverflow::Spill;
+  return b;
+}
+
 TimingResult runTiming(FragmentSource& src, model::OitAlgorithm& algo, const RopConfig& cfg,
                        const TimingOptions& opt);
 

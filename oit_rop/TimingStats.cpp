@@ -26,6 +26,9 @@ const char* stallKey(Stall s) {
     case Stall::DramBandwidth: return "dram_bandwidth";
     case Stall::AluBusy: return "alu_busy";
     case Stall::InputStarved: return "input_starved";
+    case Stall::AtomicWait: return "atomic_wait";
+    case Stall::ListWalk: return "list_walk";
+    case Stall::Sort: return "sort";
   }
   return "?";
 }

@@ -17,8 +17,13 @@ enum class Stage : uint8_t { ShaderInput, EarlyDepth, PixelLock, Cache, BlendAlu
 inline constexpr unsigned kStageCount = 6;
 const char* stageKey(Stage s);  // "shader_input", ... (report keys)
 
-enum class Stall : uint8_t { LockWait, ScoreboardFull, CacheMissWait, DramBandwidth, AluBusy, InputStarved };
-inline constexpr unsigned kStallCount = 6;
+// AtomicWait: the BlendAlu's blends all wait for the A-buffer's node counter
+// (NodeCounter); ListWalk: the resolve waits for a tile's dependent node
+// reads; Sort: the resolve sorts a tile's lists (A-buffer).
+enum class Stall : uint8_t {
+  LockWait, ScoreboardFull, CacheMissWait, DramBandwidth, AluBusy, InputStarved, AtomicWait, ListWalk, Sort
+};
+inline constexpr unsigned kStallCount = 9;
 const char* stallKey(Stall s);  // "lock_wait", ...
 
 // What one stage did in one cycle.

@@ -22,6 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// Far above any real sweep; a spec beyond it is a mistake (or would take days).
+constexpr size_t kMaxSweepPoints = 100000;
+
 std::string sanitize(const std::string& s) {
   std::string r;
   for (char c : s) r += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-') ? c : '_';
@@ -53,6 +56,7 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     if (t.is_string()) {
       e.path = t.get<std::string>();
     } else if (t.is_object() && t.contains("path")) {
+      if (!t["path"].is_string()) throw std::invalid_argument(where + ".path: expected a trace file path");
       e.path = t["path"].get<std::string>();
     } else if (t.is_object() && t.contains("gen")) {
       if (!t["gen"].is_string()) throw std::invalid_argument(where + ".gen: expected a scene name");
@@ -77,7 +81,10 @@ std::vector<TraceEntry> parseTraces(const ojson& spec, const std::string& specPa
     } else {
       throw std::invalid_argument(where + ": expected a path, {\"path\": ...} or {\"gen\": SCENE, ...}");
     }
-    if (t.is_object() && t.contains("name")) e.name = t["name"].get<std::string>();
+    if (t.is_object() && t.contains("name")) {
+      if (!t["name"].is_string()) throw std::invalid_argument(where + ".name: expected a name (a string)");
+      e.name = t["name"].get<std::string>();
+    }
     if (e.gen_args.empty()) {
       if (fs::path(e.path).is_relative()) e.path = (base / e.path).lexically_normal().string();
       if (!fs::exists(e.path)) throw std::invalid_argument(where + ": trace " + e.path + " does not exist");
@@ -187,8 +194,16 @@ Plan planSweep(const ojson& spec, const std::string& specPath, const fs::path& o
   }
 
   const std::string exeOut = plan.out.string();
+  // A bound on the product, checked as it grows (it could overflow): every
+  // point is resolved and planned before anything runs.
   size_t combos = 1;
-  for (const Axis& a : axes) combos *= a.values.size();
+  for (const Axis& a : axes) {
+    combos *= a.values.size();
+    if (combos * plan.traces.size() > kMaxSweepPoints)
+      throw std::invalid_argument(fmt::format(
+          "sweep spec {}: the traces and axes give more than {} points (at axes.{}); split the sweep", specPath,
+          kMaxSweepPoints, a.name));
+  }
   plan.combinations = combos * plan.traces.size();
   std::map<std::string, std::string> planned;         // run identity -> point id
   std::vector<std::set<std::string>> axis_ignored(axes.size());  // why each axis went unused
@@ -254,7 +269,7 @@ Plan planSweep(const ojson& spec, const std::string& specPath, const fs::path& o
       p.id = fmt::format("{:04d}-{}", plan.points.size(), sanitize(label));
       planned.emplace(key, p.id);
       // The point's ROP configuration is resolved now, as `oitsim run` resolves
-      // it in both modes (a preset unset: the config file's, else igpu), so a
+      // it in both modes (a preset unset: the config file's, else iris-pro-5200), so a
       // combination that breaks a constraint stops the sweep before anything
       // runs instead of failing every point.
       {

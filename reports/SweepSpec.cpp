@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "model/StorageFormat.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
+#include "traces/InputFile.hpp"
 
 namespace oit::sweep {
 
@@ -69,7 +71,7 @@ bool isWhole(const ojson& v, long long min) {
 void validateRopParameter(const std::string& key, const ojson& v, const std::string& where) {
   const std::string text = scalarText(v, where);  // its own error names `where` once
   try {
-    rop::ConfigTree::forPreset("igpu").set(key, text);
+    rop::ConfigTree::forPreset("iris-pro-5200").set(key, text);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(where + ": " + key + " = " + v.dump() + ": " + e.what());
   }
@@ -126,8 +128,9 @@ void validateSetting(const std::string& key, const ojson& v, const std::string& 
       bad("functional or timing");
   } else if (key == "preset") {
     const auto names = rop::presetNames();
-    if (!v.is_string() || std::find(names.begin(), names.end(), v.get<std::string>()) == names.end())
-      bad("a ROP preset (" + joinNames(names) + ")");
+    if (!v.is_string() ||
+        std::find(names.begin(), names.end(), rop::canonicalPresetName(v.get<std::string>())) == names.end())
+      bad("a ROP preset (" + joinNames(names) + "; aliases igpu, dgpu)");
   } else if (key == "config") {
     if (!v.is_string()) bad("a ROP config file path");
     try {
@@ -261,19 +264,22 @@ except (ValueError, TypeError) as e:
 // syntax with nlohmann's line and column, a key repeated within one object (the
 // parsers would keep the last silently; config files refuse it too), and a top
 // level that is not an object.
+// A spec is a few kilobytes; far more is not one (and would be read whole).
+constexpr uint64_t kMaxSpecBytes = uint64_t(16) << 20;
+
 ojson loadSpec(const std::string& path) {
-  if (!fs::exists(path)) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  // A regular file only, opened without blocking (a FIFO would hang).
+  const InputFile in = openInputFile(path);
+  if (!in && in.error == ENOENT) throw std::invalid_argument("sweep spec " + path + ": no such file");
+  if (!in) throw std::invalid_argument("sweep spec " + path + ": " + in.problem);
   const std::string ext = fs::path(path).extension().string();
   const bool yaml = ext == ".yaml" || ext == ".yml";
   std::string text;
   if (yaml) {
     text = yamlToJson(path);
   } else {
-    std::ifstream in(path);
-    if (!in) throw std::invalid_argument("sweep spec " + path + ": cannot open");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    text = ss.str();
+    std::string problem;
+    if (!readAll(in, kMaxSpecBytes, text, problem)) throw std::invalid_argument("sweep spec " + path + ": " + problem);
   }
   // Repeated keys, named by their path (base.mode, traces[1].gen).
   const auto cb = rop::refuseRepeatedKeys<ojson>(

@@ -16,6 +16,9 @@ packages=(
   libegl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
   # `oitsim report` (plots, PFM conversion), YAML sweep specs, the report's browser test
   python3 python3-matplotlib python3-yaml chromium
+  # the sanitizer and fuzzing builds (scripts/sanitize.sh, scripts/fuzz.sh): clang,
+  # its ASan/UBSan/libFuzzer runtimes, llvm-symbolizer for readable reports
+  clang-14 libclang-rt-14-dev llvm-14
 )
 
 missing=()

@@ -14,12 +14,10 @@
 
 namespace oit::detail {
 
-namespace {
-
-}
 
 AtomicFile::AtomicFile(std::string path, size_t buffer_bytes)
     : path_(std::move(path)), buf_(buffer_bytes) {
+
   // pid + sequence: concurrent writers (other processes, other threads) never
   // share a temporary file; O_EXCL guarantees it.
   tmp_ = tempPathNextTo(path_);

@@ -1,5 +1,7 @@
 // Binary trace format v1 (FORMAT.md): mmap-based validating reader and
-// buffered writer.
+// buffered writer. The reader copies each batch out of the mapping (through
+// copyFromMapping, so a trace truncated under a run is an error, not a
+// SIGBUS) and validates the copy.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/mman.h>
@@ -12,6 +14,8 @@
 #include <unordered_map>
 
 #include "traces/AtomicFile.hpp"
+#include "traces/InputFile.hpp"
+#include "traces/MappedCopy.hpp"
 #include "traces/TraceBackends.hpp"
 #include "traces/TraceFormat.hpp"
 #include "traces/DrawStateTable.hpp"
@@ -41,6 +45,8 @@ std::string hexBytes(const unsigned char* p, size_t n) {
   return s;
 }
 
+std::string changedMessage(const std::string& what);
+
 class BinaryReader final : public FragmentSource {
  public:
   BinaryReader(const std::string& path, const OpenOptions& opts);
@@ -61,6 +67,11 @@ class BinaryReader final : public FragmentSource {
   }
   void parseHeader();
   void releaseBelow(uint64_t offset);
+  // Throws "the trace changed while it was read" unless the file still has the
+  // size it had at open (a file shrunk inside its last page gives zeros, not a
+  // SIGBUS, so the size is checked for every batch and at the end).
+  void checkUnchanged(uint64_t record) const;
+  [[noreturn]] void changed(uint64_t record, const std::string& what) const;
 
   // Owns the mapping, so it is unmapped even when the constructor throws.
   struct Mapping {
@@ -76,6 +87,7 @@ class BinaryReader final : public FragmentSource {
 
   std::string path_;
   TraceHeader header_;
+  FileDescriptor fd_;  // kept open for the size checks
   Mapping mapping_;
   unsigned char* map_ = nullptr;  // mapping_.p
   uint64_t size_ = 0;
@@ -86,59 +98,54 @@ class BinaryReader final : public FragmentSource {
   uint64_t released_ = 0;  // [0, released_) of the mapping has been given back
   uint64_t page_ = 4096;
   RecordRules rules_;
-  std::vector<Fragment> decoded_;  // unorm8 only: one batch
+  std::vector<Fragment> batch_buf_;        // one batch, copied out of the mapping (fp32) or decoded (unorm8)
+  std::vector<unsigned char> raw_;         // unorm8 only: one batch of raw records
 };
 
 BinaryReader::BinaryReader(const std::string& path, const OpenOptions& opts)
     : path_(path), batch_(opts.batch_records) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw TraceError(path_, fmt::format("cannot open: {}", std::strerror(errno)));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0) {
-    const int err = errno;
-    ::close(fd);
-    throw TraceError(path_, fmt::format("cannot stat: {}", std::strerror(err)));
-  }
-  if (!S_ISREG(st.st_mode)) {
-    ::close(fd);
-    throw TraceError(path_, "not a regular file (the reader maps the whole file)");
-  }
-  size_ = static_cast<uint64_t>(st.st_size);
+  // Non-blocking open of a regular file only: a FIFO or a device is refused
+  // before anything is read (the reader maps the whole file).
+  InputFile in = openInputFile(path);
+  if (!in) throw TraceError(path_, in.problem);
+  fd_ = std::move(in.fd);
+  size_ = in.size;
   if (size_ > 0) {
-    void* m = ::mmap(nullptr, size_, PROT_READ, MAP_SHARED, fd, 0);
-    if (m == MAP_FAILED) {
-      const int err = errno;
-      ::close(fd);
-      throw TraceError(path_, fmt::format("cannot mmap: {}", std::strerror(err)));
-    }
+    void* m = ::mmap(nullptr, size_, PROT_READ, MAP_SHARED, fd_.get(), 0);
+    if (m == MAP_FAILED) throw TraceError(path_, fmt::format("cannot mmap: {}", std::strerror(errno)));
     mapping_.p = m;
     mapping_.n = size_;
     map_ = static_cast<unsigned char*>(m);
   }
-  ::close(fd);  // the mapping keeps the file
   page_ = static_cast<uint64_t>(::sysconf(_SC_PAGESIZE));
   parseHeader();
   if (map_) ::madvise(map_, size_, MADV_SEQUENTIAL);
 }
 
 void BinaryReader::parseHeader() {
+  // The header is parsed from copies (a file truncated since the fstat() would
+  // fault in the mapping): first the fixed header, then the draw table.
+  unsigned char fixed[fv::kFixedHeaderBytes] = {};
+  const size_t fixed_have = static_cast<size_t>(std::min<uint64_t>(size_, fv::kFixedHeaderBytes));
+  if (fixed_have > 0 && !copyFromMapping(fixed, map_, fixed_have))
+    throw TraceError(path_, changedMessage("its header cannot be read any more"));
   // Magic first: a CSV or foreign file must say so, not "truncated".
   const size_t magic_have = static_cast<size_t>(std::min<uint64_t>(size_, sizeof fv::kMagic));
-  if (std::memcmp(map_ ? map_ : fv::kMagic, fv::kMagic, magic_have) != 0) {
+  if (std::memcmp(fixed, fv::kMagic, magic_have) != 0) {
     std::string hint = ": not an oitsim binary trace";
-    const std::string_view start(reinterpret_cast<const char*>(map_), magic_have);
+    const std::string_view start(reinterpret_cast<const char*>(fixed), magic_have);
     if (start.starts_with("# oitsim") || start.starts_with("draw,pri"))
       hint = ": this looks like a CSV trace; CSV traces need a .csv extension";
     fail(0, std::nullopt, "magic",
          fmt::format("bad magic: expected {}, found {}{}", hexBytes(fv::kMagic, 8),
-                     hexBytes(map_, magic_have), hint));
+                     hexBytes(fixed, magic_have), hint));
   }
   if (size_ < fv::kFixedHeaderBytes)
     fail(size_, std::nullopt, "header",
          fmt::format("truncated header: the file ends at byte offset {}, the fixed header needs {} "
                      "bytes",
                      size_, fv::kFixedHeaderBytes));
-  const unsigned char* h = map_;
+  const unsigned char* h = fixed;
   header_.version = load<uint32_t>(h + fv::kOffVersion);
   if (header_.version != fv::kVersion && header_.version != fv::kVersion2)
     fail(fv::kOffVersion, std::nullopt, "version",
@@ -209,11 +216,14 @@ void BinaryReader::parseHeader() {
   }
 
   // Draw table.
+  std::vector<unsigned char> table(static_cast<size_t>(min_header - fv::kFixedHeaderBytes));
+  if (!table.empty() && !copyFromMapping(table.data(), map_ + fv::kFixedHeaderBytes, table.size()))
+    throw TraceError(path_, changedMessage("its draw table cannot be read any more"));
   std::unordered_map<uint32_t, uint32_t> seen;
   header_.draws.reserve(draw_count);
   for (uint32_t i = 0; i < draw_count; ++i) {
     const uint64_t entry = fv::kFixedHeaderBytes + uint64_t{i} * fv::kDrawEntryBytes;
-    const unsigned char* e = h + entry;
+    const unsigned char* e = table.data() + (entry - fv::kFixedHeaderBytes);
     DrawInfo d;
     d.id = load<uint32_t>(e + fv::kDrawOffId);
     if (auto [it, fresh] = seen.emplace(d.id, i); !fresh)
@@ -276,8 +286,25 @@ void BinaryReader::parseHeader() {
   rules_.width = header_.width;
   rules_.height = header_.height;
   rules_.draws = DrawSet(header_.draws);
-  if (header_.encoding == ColourEncoding::Unorm8)
-    decoded_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
+  batch_buf_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
+  if (header_.encoding == ColourEncoding::Unorm8) raw_.resize(batch_buf_.size() * record_bytes_);
+}
+
+std::string changedMessage(const std::string& what) {
+  return fmt::format("the trace changed while it was read: {} (another process truncated or rewrote it; a trace "
+                     "must not change during a run)",
+                     what);
+}
+
+void BinaryReader::changed(uint64_t record, const std::string& what) const {
+  throw TraceError(path_, data_offset_ + record * record_bytes_, record, "", changedMessage(what));
+}
+
+void BinaryReader::checkUnchanged(uint64_t record) const {
+  struct stat st {};
+  if (::fstat(fd_.get(), &st) != 0) changed(record, fmt::format("cannot stat it: {}", std::strerror(errno)));
+  if (static_cast<uint64_t>(st.st_size) < size_)
+    changed(record, fmt::format("it is now {} bytes, it was {} bytes when opened", st.st_size, size_));
 }
 
 void BinaryReader::releaseBelow(uint64_t offset) {
@@ -291,20 +318,26 @@ void BinaryReader::releaseBelow(uint64_t offset) {
 
 std::span<const Fragment> BinaryReader::next() {
   const uint64_t count = header_.fragment_count;
-  if (pos_ >= count) return {};
+  if (pos_ >= count) {
+    checkUnchanged(pos_);  // a run ends only on records that were all there
+    return {};
+  }
   const size_t n = static_cast<size_t>(std::min<uint64_t>(batch_, count - pos_));
   const uint64_t begin = data_offset_ + pos_ * record_bytes_;
-  // The previous batch's span is dead now: its pages can go.
+  // The previous batch's copy is dead now: its pages can go.
   releaseBelow(begin);
-  std::span<const Fragment> out;
+  checkUnchanged(pos_);
+  Fragment* out = batch_buf_.data();
   size_t bad = n;
   if (header_.encoding == ColourEncoding::Fp32) {
-    // header_bytes is a multiple of 64 and the mapping page-aligned: records are aligned.
-    out = {reinterpret_cast<const Fragment*>(map_ + begin), n};
-    bad = firstInvalid(out, rules_);
+    // fp32 records are exactly oit::Fragment: copy, then validate the copy.
+    if (!copyFromMapping(out, map_ + begin, n * sizeof(Fragment)))
+      changed(pos_, fmt::format("its records from byte offset {} on are gone", begin));
+    bad = firstInvalid({out, n}, rules_);
   } else {
-    bad = decodeUnorm8(map_ + begin, decoded_.data(), n, rules_);
-    out = {decoded_.data(), n};
+    if (!copyFromMapping(raw_.data(), map_ + begin, n * record_bytes_))
+      changed(pos_, fmt::format("its records from byte offset {} on are gone", begin));
+    bad = decodeUnorm8(raw_.data(), out, n, rules_);
   }
   if (bad < n) {
     const Violation v = *checkRecord(out[bad], rules_);
@@ -313,7 +346,7 @@ std::span<const Fragment> BinaryReader::next() {
          fv::fieldName(v.field), v.message);
   }
   pos_ += n;
-  return out;
+  return {out, n};
 }
 
 class BinaryWriter final : public FragmentSink {

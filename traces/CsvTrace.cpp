@@ -1,18 +1,21 @@
 // CSV form of trace format v1 (FORMAT.md, "CSV form"): a two-pass streaming
-// reader (pass 1 builds the draw table and count, pass 2 hands out batches)
-// and a buffered writer. Floats are written in shortest round-trip form.
+// reader (pass 1 builds the draw table and count, pass 2 hands out batches;
+// memory: one batch, one read buffer and the draw table) and a buffered
+// writer. Floats are written in shortest round-trip form.
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
-#include <fstream>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_map>
 
 #include "traces/AtomicFile.hpp"
+#include "traces/InputFile.hpp"
 #include "traces/TraceBackends.hpp"
 #include "traces/TraceFormat.hpp"
 #include "traces/DrawStateTable.hpp"
@@ -74,40 +77,104 @@ std::string printable(std::string_view s) {
   return out;
 }
 
-// Reads lines and keeps track of where each starts.
+// Reads lines from one open file descriptor (read(), no mapping) through a
+// fixed buffer, and keeps track of where each starts. A line longer than
+// fv::kMaxCsvLineBytes is an error naming it, so a file without line ends (or
+// with a runaway line) costs no more memory than any other.
 class LineReader {
  public:
-  explicit LineReader(const std::string& path) : in_(path, std::ios::binary) {}
-  bool isOpen() const { return in_.is_open(); }
+  LineReader(std::string path, FileDescriptor fd)
+      : path_(std::move(path)), fd_(std::move(fd)), buf_(fv::kMaxCsvLineBytes + kChunk) {}
   // False at end of file. Strips a trailing CR (files edited on Windows) and a
   // leading UTF-8 byte order mark.
   bool next() {
-    if (!std::getline(in_, line_)) return false;
+    size_t nl = find();
+    while (nl == kNone) {
+      if (eof_) {
+        if (begin_ == end_) return false;
+        nl = end_;  // the last line has no line end
+        break;
+      }
+      fill();
+      nl = find();
+    }
+    const size_t len = nl - begin_;
+    if (len > fv::kMaxCsvLineBytes) tooLong();
     offset_ = next_offset_;
-    next_offset_ += line_.size() + (in_.eof() ? 0 : 1);
     ++number_;
-    if (!line_.empty() && line_.back() == '\r') line_.pop_back();
+    line_ = std::string_view(buf_.data() + begin_, len);
+    const size_t used = nl < end_ ? len + 1 : len;
+    begin_ += used;
+    next_offset_ += used;
+    if (!line_.empty() && line_.back() == '\r') line_.remove_suffix(1);
     if (offset_ == 0 && line_.starts_with("\xEF\xBB\xBF")) {  // UTF-8 BOM from some editors
-      line_.erase(0, 3);
+      line_.remove_prefix(3);
       offset_ = 3;
     }
     return true;
   }
+  // Reading goes on at `offset`, the start of line `line_number` + 1.
   void seek(uint64_t offset, uint64_t line_number) {
-    in_.clear();
-    in_.seekg(static_cast<std::streamoff>(offset));
+    begin_ = end_ = 0;
+    eof_ = false;
+    file_pos_ = offset;
     next_offset_ = offset;
     number_ = line_number;
   }
-  bool bad() const { return in_.bad(); }
+  // Up to n bytes from the start of the file (does not move the reader).
+  std::string_view peek(size_t n) {
+    head_.resize(n);
+    const ssize_t k = readAt(head_.data(), n, 0);
+    head_.resize(static_cast<size_t>(k));
+    return head_;
+  }
   std::string_view line() const { return line_; }
   uint64_t number() const { return number_; }  // 1-based number of the current line
   uint64_t offset() const { return offset_; }  // byte offset of the current line
   uint64_t nextOffset() const { return next_offset_; }
+  int fd() const { return fd_.get(); }
 
  private:
-  std::ifstream in_;
-  std::string line_;
+  static constexpr size_t kChunk = size_t{1} << 20;
+  static constexpr size_t kNone = ~size_t{0};
+  size_t find() const {
+    const void* p = std::memchr(buf_.data() + begin_, '\n', end_ - begin_);
+    return p ? static_cast<size_t>(static_cast<const char*>(p) - buf_.data()) : kNone;
+  }
+  // Moves the unread bytes to the front and reads more after them.
+  void fill() {
+    if (end_ - begin_ > fv::kMaxCsvLineBytes) tooLong();
+    std::memmove(buf_.data(), buf_.data() + begin_, end_ - begin_);
+    end_ -= begin_;
+    begin_ = 0;
+    const ssize_t k = readAt(buf_.data() + end_, buf_.size() - end_, file_pos_);
+    if (k == 0) eof_ = true;
+    end_ += static_cast<size_t>(k);
+    file_pos_ += static_cast<uint64_t>(k);
+  }
+  ssize_t readAt(char* dst, size_t n, uint64_t at) {
+    for (;;) {
+      const ssize_t k = ::pread(fd_.get(), dst, n, static_cast<off_t>(at));
+      if (k >= 0) return k;
+      if (errno != EINTR) throw TraceError(path_, fmt::format("read error: {}", std::strerror(errno)));
+    }
+  }
+  // The line after the current one (the one being read) is too long.
+  [[noreturn]] void tooLong() const {
+    throw TraceError::inCsv(path_, number_ + 1, next_offset_, std::nullopt, "",
+                            fmt::format("line is longer than {} bytes, the most a CSV trace line may have "
+                                        "(FORMAT.md section 8.2); is this a CSV trace?",
+                                        fv::kMaxCsvLineBytes));
+  }
+
+  std::string path_;
+  FileDescriptor fd_;
+  std::vector<char> buf_;
+  std::string head_;
+  size_t begin_ = 0, end_ = 0;  // unread bytes of buf_
+  bool eof_ = false;
+  uint64_t file_pos_ = 0;     // file offset of buf_[end_]
+  std::string_view line_;
   uint64_t number_ = 0;
   uint64_t offset_ = 0;
   uint64_t next_offset_ = 0;
@@ -137,7 +204,7 @@ class CsvReader final : public FragmentSource {
     throw TraceError::inCsv(path_, in_.number(), byte_offset, record, printable(field), printable(msg));
   }
   // A binary trace or a gzip file named .csv: say so rather than quote its bytes.
-  void refuseBinaryForms() const;
+  void refuseBinaryForms();
   void parseMetadata(std::string_view line);
   // The draw that would be entry kMaxDraws + 1 of the table.
   std::string tooManyDraws(uint32_t id) const {
@@ -162,12 +229,24 @@ class CsvReader final : public FragmentSource {
   uint64_t pos_ = 0;
   size_t batch_;
   std::vector<Fragment> buf_;
+  uint64_t size_at_open_ = 0;
 };
 
+// Non-blocking open of a regular file only: a FIFO, a device or a folder is
+// refused before anything is read. The one descriptor serves both passes.
+FileDescriptor openCsvFile(const std::string& path) {
+  InputFile f = openInputFile(path);
+  if (!f) throw TraceError(path, f.problem);
+  return std::move(f.fd);
+}
+
 CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
-    : path_(path), in_(path), batch_(opts.batch_records) {
-  if (!in_.isOpen()) throw TraceError(path_, fmt::format("cannot open: {}", std::strerror(errno)));
+    : path_(path), in_(path, openCsvFile(path)), batch_(opts.batch_records) {
   refuseBinaryForms();
+  {
+    struct stat st {};
+    if (::fstat(in_.fd(), &st) == 0) size_at_open_ = static_cast<uint64_t>(st.st_size);
+  }
   // Comment header, up to the column line.
   bool found_columns = false;
   while (in_.next()) {
@@ -184,7 +263,6 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
     found_columns = true;
     break;
   }
-  if (in_.bad()) throw TraceError(path_, "read error");
   if (!found_columns)  // lines are 1-based: an empty file's error is on line 1
     throw TraceError::inCsv(path_, std::max<uint64_t>(in_.number(), 1), in_.nextOffset(), std::nullopt, "header",
                             fmt::format("no column line '{}' (empty file or only comments)", kColumnLine));
@@ -214,18 +292,14 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
   // Pass 1: validate every row, count them, complete the draw table.
   uint64_t count = 0;
   while (nextDataLine()) parseRow(count++, true);
-  if (in_.bad()) throw TraceError(path_, "read error");
   header_.fragment_count = count;
   rules_.draws = DrawSet(header_.draws);
   buf_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
   rewind();
 }
 
-void CsvReader::refuseBinaryForms() const {
-  char start[sizeof fv::kMagic] = {};
-  std::ifstream f(path_, std::ios::binary);
-  f.read(start, sizeof start);
-  const std::string_view have(start, static_cast<size_t>(f.gcount()));
+void CsvReader::refuseBinaryForms() {
+  const std::string_view have = in_.peek(sizeof fv::kMagic);
   auto hex = [&] {
     std::string h;
     for (const char c : have) h += fmt::format("{}{:02X}", h.empty() ? "" : " ", static_cast<unsigned char>(c));
@@ -463,7 +537,9 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
   if (it == draws_.end()) {
     if (!first_pass)
       throw TraceError::inCsv(path_, in_.number(), base, record, "draw",
-                              "the file changed while it was being read (new draw id)");
+                              fmt::format("the trace changed while it was read: draw {} was not in the file when "
+                                          "it was opened (a trace must not change during a run)",
+                                          f.draw));
     // The table's limit is checked here, at the row that would break it (the
     // binary writer would only find out after the whole first pass).
     if (header_.draws.size() >= fv::kMaxDraws) err(kDraw, start[kDraw], tooManyDraws(f.draw));
@@ -491,12 +567,20 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
 }
 
 std::span<const Fragment> CsvReader::next() {
+  // The read buffer may hold the rest of a small file: the size tells a
+  // shortened file even then (also at the end, so no run ends on one).
+  struct stat st {};
+  if (::fstat(in_.fd(), &st) == 0 && static_cast<uint64_t>(st.st_size) < size_at_open_)
+    throw TraceError::inCsv(path_, in_.number(), in_.nextOffset(), pos_, "",
+                            fmt::format("the trace changed while it was read: it is now {} bytes, it was {} bytes "
+                                        "when opened (a trace must not change during a run)",
+                                        st.st_size, size_at_open_));
   size_t n = 0;
   while (n < buf_.size() && pos_ + n < header_.fragment_count) {
     if (!nextDataLine())
       throw TraceError::inCsv(path_, in_.number(), in_.nextOffset(), pos_ + n, "",
-                              fmt::format("the file changed while it was being read: it now ends "
-                                          "before record {} of {}",
+                              fmt::format("the trace changed while it was read: it now ends before record {} "
+                                          "of {} (a trace must not change during a run)",
                                           pos_ + n, header_.fragment_count));
     buf_[n] = parseRow(pos_ + n, false);
     ++n;

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
+#include <charconv>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -89,7 +91,41 @@ TempFile::~TempFile() {
   unregisterTempFile(path_);
 }
 
+bool processGone(int pid) { return pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH; }
+
+int pidAfterPrefix(std::string_view name, std::string_view prefix) {
+  if (!name.starts_with(prefix)) return 0;
+  name.remove_prefix(prefix.size());
+  int pid = 0;
+  const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), pid);
+  if (ec != std::errc() || end == name.data() || pid <= 0) return 0;
+  return end == name.data() + name.size() || *end == '.' ? pid : 0;
+}
+
+size_t removeAbandoned(const std::string& dir, const std::function<int(std::string_view name)>& pidOf) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  size_t removed = 0;
+  fs::directory_iterator it(dir.empty() ? fs::path(".") : fs::path(dir), ec);
+  for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const int pid = pidOf(name);
+    if (pid == 0 || pid == ::getpid() || !processGone(pid)) continue;
+    std::error_code rm;
+    if (it->is_regular_file(rm) && fs::remove(it->path(), rm)) ++removed;
+  }
+  return removed;
+}
+
 std::string tempPathNextTo(const std::string& path) {
+  // What a writer of this path killed outright (kill -9) left behind: its
+  // "<name>.tmp.<pid>.<n>" (or, for long names, ".oitsim.tmp.<pid>.<n>").
+  const std::filesystem::path target(path);
+  const std::string own = target.filename().string() + ".tmp.";
+  removeAbandoned(target.parent_path().string(), [&](std::string_view name) {
+    if (const int pid = pidAfterPrefix(name, own)) return pid;
+    return pidAfterPrefix(name, ".oitsim.tmp.");
+  });
   const std::string suffix = fmt::format(".tmp.{}.{}", ::getpid(), g_seq.fetch_add(1));
   const std::filesystem::path p(path);
   if (p.filename().string().size() + suffix.size() <= 255) return path + suffix;

@@ -51,6 +51,10 @@ inline constexpr uint32_t kMaxDraws = 1u << 20;
 
 inline constexpr uint32_t kMaxFrameSize = 65535;  // x, y are u16
 
+// CSV form: the most bytes a line may have before its '\n' (a CR included).
+// Bounds the reader's memory whatever the file holds (FORMAT.md section 8).
+inline constexpr size_t kMaxCsvLineBytes = 65536;
+
 // header_bytes of a v1 file written by this library (readers accept any larger
 // multiple of 64 and skip the extra bytes).
 inline constexpr uint64_t headerBytesFor(uint64_t draw_count) {

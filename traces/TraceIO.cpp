@@ -66,6 +66,7 @@ bool isCsvTracePath(const std::string& path) { return detail::isCsvPath(path); }
 
 std::unique_ptr<FragmentSource> openTrace(const std::string& path, const OpenOptions& opts) {
   if (opts.batch_records == 0) throw std::invalid_argument("OpenOptions.batch_records must be > 0");
+  if (path.empty()) throw TraceError("''", "expected a trace file, got an empty path");
   return detail::isCsvPath(path) ? detail::openCsvTrace(path, opts)
                                  : detail::openBinaryTrace(path, opts);
 }

@@ -2,8 +2,9 @@
 // so the tree and the struct cannot drift apart silently (tests/oit_rop/
 // test_config.cpp counts each section's fields against the registry).
 #include "oit_rop/config/ConfigTree.hpp"
-#include "oit_rop/memory/MemorySystem.hpp"
+#include "oit_rop/memory/DramTimings.hpp"
 #include "oit_rop/config/RepeatedKeys.hpp"
+#include "traces/InputFile.hpp"
 
 #include <fmt/format.h>
 
@@ -12,7 +13,6 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
@@ -132,7 +132,7 @@ const std::vector<Property>& registry() {
       integer("partitions.count", &R::partitions, &PartitionConfig::count, 1, 64, "",
               "ROP partitions; screen tiles are interleaved over them"),
       integer("partitions.tile_width", &R::partitions, &PartitionConfig::tile_width, 1, 64, "pixels",
-              "screen tile width; one tile = one blending-array cache line", true),
+              "screen tile width; tiles are the unit of the partition interleave, HiZ, tile locks, fast clear and resolve", true),
       integer("partitions.tile_height", &R::partitions, &PartitionConfig::tile_height, 1, 64, "pixels",
               "screen tile height", true),
 
@@ -176,22 +176,94 @@ const std::vector<Property>& registry() {
               "end of blend to end of shader (release = end_of_shader)"),
 
       integer("cache.size_bytes", &R::cache, &CacheConfig::size_bytes, 1024, uint64_t(1) << 30, "bytes",
-              "blending-array tile cache per partition (line = one tile's arrays)"),
+              "the ROP's blending-array cache, per partition"),
       integer("cache.ways", &R::cache, &CacheConfig::ways, 1, 64, "", "cache associativity (LRU)"),
       integer("cache.miss_queue", &R::cache, &CacheConfig::miss_queue, 1, 4096, "lines",
-              "outstanding line fills per partition"),
+              "outstanding line fills per partition (one entry per missing line)"),
       integer("cache.hit_latency", &R::cache, &CacheConfig::hit_latency, 1, 10000, "cycles", "cache hit latency"),
+      integer("cache.line_bytes", &R::cache, &CacheConfig::line_bytes, 32, 1024, "bytes",
+              "cache line (one tag); a fragment touches the lines holding the bytes its insert reads and writes",
+              true),
+      integer("cache.sector_bytes", &R::cache, &CacheConfig::sector_bytes, 0, 1024, "bytes",
+              "fill and write-back unit inside a line (valid and dirty per sector); 0 = the whole line"),
+
+      enumeration("memory.array_layout", &R::memory, &MemoryLayoutConfig::array_layout, {"pixel_major", "row_major"},
+                  "per-pixel arrays of a tile in memory: pixel_major = each pixel's array contiguous, pixels in "
+                  "tile order; row_major = row i of every pixel of the tile contiguous (MEMORY.md)"),
+
+      integer("l2.size_bytes", &R::l2, &SharedCacheConfig::size_bytes, 0, uint64_t(1) << 32, "bytes",
+              "shared cache between every partition and DRAM (or the l3); 0 = none"),
+      integer("l2.ways", &R::l2, &SharedCacheConfig::ways, 1, 64, "", "l2 associativity per slice (LRU)"),
+      integer("l2.line_bytes", &R::l2, &SharedCacheConfig::line_bytes, 32, 4096, "bytes", "l2 cache line", true),
+      integer("l2.sector_bytes", &R::l2, &SharedCacheConfig::sector_bytes, 0, 4096, "bytes",
+              "l2 fill and write-back unit inside a line; 0 = the whole line"),
+      integer("l2.slices", &R::l2, &SharedCacheConfig::slices, 1, 256, "",
+              "l2 slices: lines are spread over them by an address hash; each slice has its own port"),
+      integer("l2.hit_latency", &R::l2, &SharedCacheConfig::hit_latency, 1, 100000, "cycles",
+              "l2 hit latency (request to data, unloaded)"),
+      real("l2.bytes_per_clock", &R::l2, &SharedCacheConfig::bytes_per_clock, 0.01, false, 4096, "bytes/clock",
+           "l2 port bandwidth per slice, in core clocks"),
+      boolean("l2.victim_only", &R::l2, &SharedCacheConfig::victim_only,
+              "l2 is filled only with the evictions of the level above (a victim cache); reads that miss it do "
+              "not allocate"),
+      integer("l3.size_bytes", &R::l3, &SharedCacheConfig::size_bytes, 0, uint64_t(1) << 32, "bytes",
+              "a further shared level of the same kind behind the l2; 0 = none"),
+      integer("l3.ways", &R::l3, &SharedCacheConfig::ways, 1, 64, "", "l3 associativity per slice (LRU)"),
+      integer("l3.line_bytes", &R::l3, &SharedCacheConfig::line_bytes, 32, 4096, "bytes", "l3 cache line", true),
+      integer("l3.sector_bytes", &R::l3, &SharedCacheConfig::sector_bytes, 0, 4096, "bytes",
+              "l3 fill and write-back unit inside a line; 0 = the whole line"),
+      integer("l3.slices", &R::l3, &SharedCacheConfig::slices, 1, 256, "",
+              "l3 slices: lines are spread over them by an address hash; each slice has its own port"),
+      integer("l3.hit_latency", &R::l3, &SharedCacheConfig::hit_latency, 1, 100000, "cycles",
+              "l3 hit latency (request to data, unloaded)"),
+      real("l3.bytes_per_clock", &R::l3, &SharedCacheConfig::bytes_per_clock, 0.01, false, 4096, "bytes/clock",
+           "l3 port bandwidth per slice, in core clocks"),
+      boolean("l3.victim_only", &R::l3, &SharedCacheConfig::victim_only,
+              "l3 is filled only with the evictions of the level above (a victim cache); reads that miss it do "
+              "not allocate"),
 
       integer("alu.blends_per_clock", &R::alu, &AluConfig::blends_per_clock, 1, 1024, "blends/clock",
               "RGBA8-rate blend inserts per clock, per partition"),
       integer("alu.base_latency", &R::alu, &AluConfig::base_latency, 1, 10000, "cycles",
               "latency of one insert"),
-      integer("alu.row_latency", &R::alu, &AluConfig::row_latency, 0, 10000, "cycles",
-              "extra latency per array row read-modify-written"),
+      integer("alu.cycles_per_compare", &R::alu, &AluConfig::cycles_per_compare, 0, 10000, "cycles",
+              "extra latency per row (node, layer, sample) whose depth an insert compares with the fragment's, "
+              "as the functional insert reports it (ALGORITHMS.md, work per insert) [inferred]"),
+      integer("alu.cycles_per_row_moved", &R::alu, &AluConfig::cycles_per_row_moved, 0, 10000, "cycles",
+              "extra latency per row an insert writes: the new row, rows shifted or rescaled behind it, a merged "
+              "row, an accumulator [inferred]"),
       real("alu.fp16_rate", &R::alu, &AluConfig::fp16_rate, 0.001, false, 1, "",
            "fp16-row blend throughput relative to 8-bit rows [inferred]"),
       real("alu.fp32_rate", &R::alu, &AluConfig::fp32_rate, 0.001, false, 1, "",
            "fp32-row blend throughput relative to 8-bit rows [inferred]"),
+
+      integer("abuffer.pool_bytes", &R::abuffer, &ABufferConfig::pool_bytes, 0, std::numeric_limits<uint64_t>::max(),
+              "bytes",
+              "algorithm abuffer: its whole allocation, heads (4 B per pixel) + node pool, whatever the scene; "
+              "fragments past the pool are dropped (fragments.dropped_pool_full); 0 = heads + "
+              "abuffer.nodes_per_pixel nodes per pixel"),
+      real("abuffer.nodes_per_pixel", &R::abuffer, &ABufferConfig::nodes_per_pixel, 0, true, 1e6, "nodes",
+           "algorithm abuffer, abuffer.pool_bytes = 0: pool nodes per pixel of the frame, as applications size "
+           "the pool by the screen [inferred]"),
+      integer("abuffer.max_sorted", &R::abuffer, &ABufferConfig::max_sorted, 1, 1u << 20, "nodes",
+              "algorithm abuffer: the resolve's local array (the shader's register budget): nodes per pixel "
+              "loaded and sorted [inferred]"),
+      enumeration("abuffer.overflow", &R::abuffer, &ABufferConfig::overflow, {"spill", "truncate"},
+                  "algorithm abuffer, a list longer than max_sorted: spill = sort it all (exact image, "
+                  "spill_cycles_per_node per node beyond), truncate = composite the first max_sorted nodes of the "
+                  "list (the newest) only"),
+      real("abuffer.atomics_per_clock", &R::abuffer, &ABufferConfig::atomics_per_clock, 0, true, 1024,
+           "atomics/clock",
+           "algorithm abuffer: increments of the global node counter per clock for the whole GPU, shared by all "
+           "partitions [inferred]"),
+      integer("abuffer.atomic_latency", &R::abuffer, &ABufferConfig::atomic_latency, 0, 100000, "cycles",
+              "algorithm abuffer: one node-counter atomic, issue to returned index [inferred]"),
+      integer("abuffer.sort_cycles_per_compare", &R::abuffer, &ABufferConfig::sort_cycles_per_compare, 0, 10000,
+              "cycles", "algorithm abuffer: resolve's insertion sort, per compare [inferred]"),
+      integer("abuffer.sort_cycles_per_move", &R::abuffer, &ABufferConfig::sort_cycles_per_move, 0, 10000,
+              "cycles", "algorithm abuffer: resolve's insertion sort, per element moved [inferred]"),
+      integer("abuffer.spill_cycles_per_node", &R::abuffer, &ABufferConfig::spill_cycles_per_node, 0, 1000000,
+              "cycles", "algorithm abuffer, overflow = spill: per node beyond max_sorted [inferred]"),
 
       integer("dram.channels", &R::dram, &DramConfig::channels, 1, 64, "", "DRAM channels (shared by all partitions)"),
       real("dram.channel_gbps", &R::dram, &DramConfig::channel_gbps, 0.1, false, 10000, "GB/s",
@@ -202,6 +274,11 @@ const std::vector<Property>& registry() {
       integer("dram.trp", &R::dram, &DramConfig::trp, 1, 255, "tCK", "precharge time"),
       integer("dram.tras", &R::dram, &DramConfig::tras, 0, 255, "tCK",
               "activate to precharge: a row stays open at least this long (0 = no limit)"),
+      integer("dram.twtr", &R::dram, &DramConfig::twtr, 0, 255, "tCK",
+              "write-to-read turnaround: end of write data to the next read command on the channel; the read's "
+              "data follows CL later, so the bus idles tWTR + CL at each switch from writes to reads"),
+      integer("dram.trtw", &R::dram, &DramConfig::trtw, 0, 255, "tCK",
+              "read-to-write turnaround: idle data bus between read data and the next write data"),
       integer("dram.banks", &R::dram, &DramConfig::banks, 1, 256, "", "banks per channel"),
       integer("dram.row_bytes", &R::dram, &DramConfig::row_bytes, 64, 1u << 20, "bytes",
               "row-buffer size per bank (across the channel's chips)", true),
@@ -209,7 +286,9 @@ const std::vector<Property>& registry() {
               "access granularity (one burst)", true),
       integer("dram.interleave_bytes", &R::dram, &DramConfig::interleave_bytes, 8, 1u << 20, "bytes",
               "consecutive bytes on one channel before the next", true),
-      boolean("dram.open_row", &R::dram, &DramConfig::open_row, "keep rows open: row hits pay CL only"),
+      boolean("dram.open_row", &R::dram, &DramConfig::open_row,
+              "keep rows open: row hits pay CL only; false = closed page: one activate per request's run of "
+              "bursts in a row, auto-precharge after it"),
       boolean("dram.bank_hash", &R::dram, &DramConfig::bank_hash,
               "bank = bank bits XOR every bank-sized group of row bits (permutation interleaving), so "
               "streams in far-apart regions fall in different banks; false = the plain row-bank-column map"),
@@ -220,12 +299,34 @@ const std::vector<Property>& registry() {
            "refresh"),
       real("dram.trfc_ns", &R::dram, &DramConfig::trfc_ns, 0, false, 100000, "ns",
            "refresh cycle time: for tRFC the channel moves no data, and its open rows are closed after it"),
+      enumeration("dram.scheduler", &R::dram, &DramConfig::scheduler, {"fcfs", "frfcfs"},
+                  "read scheduling: fcfs = first come first served; frfcfs = a read whose data can go earlier takes "
+                  "bus time the older reads leave idle (their precharge, activate, turnaround), never moving them"),
+      integer("dram.queue_depth", &R::dram, &DramConfig::queue_depth, 1, 4096, "bursts",
+              "FR-FCFS window per channel: a read may pass at most this many bursts of older requests "
+              "(1 = fcfs)"),
+      integer("dram.write_queue", &R::dram, &DramConfig::write_queue, 1, 4096, "bursts",
+              "posted-write entries per channel: a write burst holds one from its acceptance until its data is on "
+              "the bus; a full queue makes the writer wait"),
+      integer("dram.write_high", &R::dram, &DramConfig::write_high, 1, 4096, "bursts",
+              "high watermark: when this many write bursts wait on a channel, its controller drains writes in a "
+              "batch (reads go first otherwise); write_high = 1, write_low = 0 writes every write at once"),
+      integer("dram.write_low", &R::dram, &DramConfig::write_low, 0, 4095, "bursts",
+              "low watermark: a batch stops once at most this many write bursts wait (whole rows of the oldest "
+              "writes are drained)"),
 
       integer("stats.interval_cycles", &R::stats, &StatsConfig::interval_cycles, 1,
               std::numeric_limits<uint64_t>::max(), "cycles", "time-series sample period"),
       integer("stats.max_samples", &R::stats, &StatsConfig::max_samples, 2, 1u << 24, "",
               "time-series length limit: on reaching it, pairs of samples merge and the period doubles "
               "(even; an odd value counts as the next lower even one)"),
+      boolean("stats.miss_classes", &R::stats, &StatsConfig::miss_classes,
+              "classify the ROP cache's misses as compulsory, capacity or conflict (a fully associative shadow "
+              "cache, updated on every line access; the shared levels': stats.level_miss_classes)"),
+      boolean("stats.level_miss_classes", &R::stats, &StatsConfig::level_miss_classes,
+              "classify the shared levels' (l2, l3) misses as well (a fully associative shadow of each level's "
+              "lines, 2 M for a 128 MB l3: 28 % of the approximate engine's time on the bench trace, "
+              "bench/RESULTS-timing.md; off, their report says miss_classes false and gives no split)"),
 
       boolean("skip.early_depth", &R::skip, &SkipConfig::early_depth,
               "culled fragments skip lock and cache (else they pass through both)"),
@@ -466,7 +567,7 @@ void ConfigTree::applyJson(const nlohmann::json& j, const std::string& origin) {
       const std::string path = prefix.empty() ? key : prefix + "." + key;
       const std::string shown = prefix.empty() ? key : prefix + "/" + key;  // where it sits in the file
       if (prefix.empty() && key == "preset") {
-        if (!val.is_string() || val.get<std::string>() != cfg_.preset)
+        if (!val.is_string() || canonicalPresetName(val.get<std::string>()) != cfg_.preset)
           throw std::invalid_argument(fmt::format(
               "{}: key 'preset': the file is for preset {} but the tree was built from preset '{}'; pass "
               "--preset {} (or drop the key)",
@@ -495,12 +596,21 @@ void ConfigTree::applyJson(const nlohmann::json& j, const std::string& origin) {
 
 namespace {
 
+// Far above any real configuration (a few KiB): a larger file is not one.
+constexpr uint64_t kMaxConfigFileBytes = uint64_t{16} << 20;
+
 // Reads a config file (JSON, comments allowed). Every error names the file:
 // syntax errors with nlohmann's line and column, number overflow (1e400) and a
 // key repeated within one object (JSON parsers keep the last silently).
 nlohmann::json readConfigFile(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
+  // A regular file only, opened without blocking (a FIFO would hang, a device
+  // never end, a directory gave "basic_filebuf::underflow error").
+  const InputFile in = openInputFile(file);
+  if (!in && in.error != 0) throw std::invalid_argument(fmt::format("{}: cannot open config file", file));
+  if (!in) throw std::invalid_argument(fmt::format("{}: {} (expected a JSON config file)", file, in.problem));
+  std::string text, problem;
+  if (!readAll(in, kMaxConfigFileBytes, text, problem))
+    throw std::invalid_argument(fmt::format("{}: config file {}", file, problem));
   const auto cb = refuseRepeatedKeys<nlohmann::json>(
       [&](const std::string& key) {
         throw std::invalid_argument(fmt::format(
@@ -510,7 +620,7 @@ nlohmann::json readConfigFile(const std::string& file) {
       },
       KeyPath::Slashed);
   try {
-    return nlohmann::json::parse(in, cb, true, /*ignore_comments=*/true);
+    return nlohmann::json::parse(text, cb, true, /*ignore_comments=*/true);
   } catch (const nlohmann::json::exception& e) {  // parse_error (with line, column), out_of_range.406 ...
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
   }
@@ -536,20 +646,69 @@ void ConfigTree::validate() const {
         "lock.granularity quad needs partitions.tile_width and tile_height of at least 2 (now {} x {}): a 2x2 quad "
         "across two tiles would be split over partitions and locked in parts",
         c.partitions.tile_width, c.partitions.tile_height));
-  // Each way must hold whole lines even for the smallest array (4 bytes per
-  // pixel); cacheGeometry() settles the real line size once the algorithm is known.
-  const uint64_t min_set = uint64_t(c.cache.ways) * c.partitions.tile_width * c.partitions.tile_height * 4;
-  if (c.cache.size_bytes % min_set != 0)
+  // The ROP cache: lines hold whole sectors, the cache whole sets of lines.
+  const auto sectorProblems = [&](const std::string& n, unsigned line, unsigned sector) {
+    if (sector == 0) return;
+    if (sector > line || line % sector != 0 || (sector & (sector - 1)) != 0)
+      errs.push_back(fmt::format("{0}.sector_bytes ({1}) must be a power of two dividing {0}.line_bytes ({2})", n,
+                                 sector, line));
+    else if (line / sector > 32)
+      errs.push_back(fmt::format("{0}.line_bytes ({1}) holds {2} sectors of {0}.sector_bytes ({3}); at most 32 are "
+                                 "modelled (valid and dirty masks of 32 bits)",
+                                 n, line, line / sector, sector));
+    if (sector != 0 && sector < 8)
+      errs.push_back(fmt::format("{}.sector_bytes ({}) must be at least 8 (or 0, the whole line)", n, sector));
+  };
+  if (c.cache.line_bytes > c.cache.size_bytes)
+    errs.push_back(fmt::format("cache.line_bytes ({}) is larger than the cache, cache.size_bytes ({})",
+                               c.cache.line_bytes, c.cache.size_bytes));
+  else if (c.cache.size_bytes % (uint64_t(c.cache.ways) * c.cache.line_bytes) != 0)
     errs.push_back(fmt::format(
-        "cache.size_bytes ({}) is not a multiple of cache.ways x tile pixels x 4 bytes ({} x {} x 4 = {})",
-        c.cache.size_bytes, c.cache.ways, c.partitions.tile_width * c.partitions.tile_height, min_set));
+        "cache.size_bytes ({}) is not a multiple of cache.ways x cache.line_bytes ({} x {} = {}): every set holds "
+        "whole lines",
+        c.cache.size_bytes, c.cache.ways, c.cache.line_bytes, uint64_t(c.cache.ways) * c.cache.line_bytes));
+  sectorProblems("cache", c.cache.line_bytes, c.cache.sector_bytes);
+  // The shared levels: l3 behind l2, lines no smaller than the level above's
+  // (a line above must fit in one line below).
+  const auto levelProblems = [&](const std::string& n, const SharedCacheConfig& l, const std::string& above,
+                                 unsigned above_line) {
+    if (l.size_bytes == 0) return;
+    if (l.line_bytes < above_line)
+      errs.push_back(fmt::format("{}.line_bytes ({}) is smaller than {}.line_bytes ({}): a line of the level above "
+                                 "must fit in one {} line",
+                                 n, l.line_bytes, above, above_line, n));
+    const uint64_t set_bytes = uint64_t(l.ways) * l.line_bytes * l.slices;
+    if (l.line_bytes > l.size_bytes)
+      errs.push_back(
+          fmt::format("{}.line_bytes ({}) is larger than the cache, {}.size_bytes ({})", n, l.line_bytes, n, l.size_bytes));
+    else if (l.size_bytes % set_bytes != 0)
+      errs.push_back(fmt::format("{0}.size_bytes ({1}) is not a multiple of {0}.slices x {0}.ways x {0}.line_bytes "
+                                 "({2} x {3} x {4} = {5}): every slice holds whole sets",
+                                 n, l.size_bytes, l.slices, l.ways, l.line_bytes, set_bytes));
+    sectorProblems(n, l.line_bytes, l.sector_bytes);
+  };
+  levelProblems("l2", c.l2, "cache", c.cache.line_bytes);
+  if (c.l3.size_bytes != 0 && c.l2.size_bytes == 0)
+    errs.push_back("l3.size_bytes is set but l2.size_bytes is 0: the l3 is the level behind the l2 (to model one "
+                   "shared level, set l2.* instead)");
+  else
+    levelProblems("l3", c.l3, "l2", c.l2.line_bytes);
   if (c.dram.burst_bytes > c.dram.interleave_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.interleave_bytes ({}): a burst would span channels",
                                c.dram.burst_bytes, c.dram.interleave_bytes));
   if (c.dram.burst_bytes > c.dram.row_bytes)
     errs.push_back(fmt::format("dram.burst_bytes ({}) > dram.row_bytes ({})", c.dram.burst_bytes, c.dram.row_bytes));
+  // The write queue's watermarks (MEMORY.md): a drain starts at write_high
+  // waiting bursts and stops at or below write_low, within write_queue entries.
+  if (c.dram.write_high > c.dram.write_queue)
+    errs.push_back(fmt::format(
+        "dram.write_high ({}) > dram.write_queue ({}): the high watermark must fit in the write queue",
+        c.dram.write_high, c.dram.write_queue));
+  if (c.dram.write_low >= c.dram.write_high)
+    errs.push_back(fmt::format("dram.write_low ({}) >= dram.write_high ({}): the low watermark must be below the high one",
+                               c.dram.write_low, c.dram.write_high));
   if (c.dram.trefi_ns > 0 && c.clock.core_mhz > 0 && c.dram.channel_gbps > 0 && c.dram.tck_ns > 0) {
-    const std::string problem = MemorySystem::refreshProblem(c.dram, c.clock.core_mhz);
+    const std::string problem = DramTimings::refreshProblem(c.dram, c.clock.core_mhz);
     if (!problem.empty()) errs.push_back(problem);
   }
   if (c.alu.fp32_rate > c.alu.fp16_rate)
@@ -643,16 +802,25 @@ std::string ConfigTree::describe() const {
 
 ConfigTree resolveTree(const std::string& preset, const std::string& config_file,
                        const std::vector<std::string>& sets) {
-  std::string name = preset;
+  std::string name = preset, preset_from_file;
   nlohmann::json file_json;
   if (!config_file.empty()) {
     file_json = readConfigFile(config_file);
     // A file naming its preset supplies it when --preset was not given.
-    if (name.empty() && file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
-      name = file_json["preset"].get<std::string>();
+    if (file_json.is_object() && file_json.contains("preset") && file_json["preset"].is_string())
+      preset_from_file = file_json["preset"].get<std::string>();
   }
-  if (name.empty()) name = "igpu";
-  ConfigTree tree = ConfigTree::forPreset(name);
+  const bool from_file = name.empty() && !preset_from_file.empty();
+  if (from_file) name = preset_from_file;
+  if (name.empty()) name = "iris-pro-5200";
+  ConfigTree tree = [&] {
+    try {
+      return ConfigTree::forPreset(name);
+    } catch (const std::invalid_argument& e) {
+      if (!from_file) throw;
+      throw std::invalid_argument(fmt::format("{}: key 'preset': {}", config_file, e.what()));
+    }
+  }();
   if (!config_file.empty()) tree.applyJson(file_json, config_file);
   for (const auto& s : sets) {
     const size_t eq = s.find('=');

@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "oit_rop/config/RopConfig.hpp"
@@ -69,13 +70,17 @@ class ConfigTree {
   RopConfig defaults_;  // the preset, for "default" columns
 };
 
-std::vector<std::string> presetNames();  // {"igpu", "dgpu"}
+std::vector<std::string> presetNames();  // {"iris-pro-5200", "titan-x-maxwell", "navi21"}
+// Other names a preset answers to: {alias, preset} ({"igpu", "iris-pro-5200"}, {"dgpu", "titan-x-maxwell"}).
+std::vector<std::pair<std::string, std::string>> presetAliases();
+// The preset an alias names; any other name unchanged.
+std::string canonicalPresetName(std::string_view name);
 // The preset's values (oit_rop/Presets.cpp); throws std::invalid_argument for an unknown name.
 RopConfig presetConfig(std::string_view name);
 // Whether the preset's value of `path` is an estimate (the notes' [inferred] or ours).
 bool presetValueInferred(std::string_view preset, std::string_view path);
 
-// Preset (empty: the file's "preset" key, else igpu), then the file (empty: none),
+// Preset (empty: the file's "preset" key, else iris-pro-5200), then the file (empty: none),
 // then each "path=value" in order; validated. Malformed or failing overrides throw
 // std::invalid_argument naming the --set option.
 ConfigTree resolveTree(const std::string& preset, const std::string& config_file,

@@ -1,7 +1,8 @@
 // Every parameter of the timing model, typed. The named property tree
 // (oit_rop/config/ConfigTree.hpp: defaults, units, descriptions, presets, JSON files,
 // --set a.b.c=value) reads and writes these fields; the model reads only this.
-// Defaults are the `igpu` preset (../shared/notes/hardware.md).
+// The struct's defaults are a base the presets start from (the old `igpu`
+// values, no L2 or L3); every preset sets its values (Presets.cpp, CONFIG.md).
 #pragma once
 
 #include <cstdint>
@@ -19,6 +20,13 @@ enum class LockMode : uint8_t { Ordered, Unordered, None };
 enum class LatencyModel : uint8_t { Fixed, Uniform };
 // cycle: stages evaluated cycle by cycle (the reference); approximate: one visit per fragment (DESIGN.md).
 enum class SimEngine : uint8_t { CycleStepped, Approximate };
+// Where a tile's per-pixel arrays live (MEMORY.md): pixel_major = each pixel's
+// array contiguous, pixels in tile order; row_major = row i of every pixel of
+// the tile contiguous (the extra words form one more row).
+enum class ArrayLayoutKind : uint8_t { PixelMajor, RowMajor };
+// The DRAM controller's read scheduling: fcfs = first come first served; frfcfs
+// = a request whose data can go now may pass older ones (MEMORY.md).
+enum class DramScheduler : uint8_t { Fcfs, FrFcfs };
 
 struct ClockConfig {
   double core_mhz = 1150.0;  // ROP / core clock
@@ -27,7 +35,7 @@ struct ClockConfig {
 
 struct PartitionConfig {
   unsigned count = 2;         // ROP partitions; the screen is split into interleaved tiles
-  unsigned tile_width = 8;    // pixels; one tile = one blending-array cache line
+  unsigned tile_width = 8;    // pixels; tiles: partition interleave, HiZ, tile locks, resolve
   unsigned tile_height = 8;
   bool operator==(const PartitionConfig&) const = default;
 };
@@ -60,20 +68,57 @@ struct LockConfig {
 };
 
 struct CacheConfig {
-  uint64_t size_bytes = 64 * 1024;   // blending-array tile cache per partition (igpu: 2 x 64 KiB)
+  uint64_t size_bytes = 64 * 1024;   // the ROP's blending-array cache, per partition
   unsigned ways = 8;
   unsigned miss_queue = 16;          // outstanding line fills
   unsigned hit_latency = 10;         // cycles
+  unsigned line_bytes = 64;          // cache line (tag); power of two
+  unsigned sector_bytes = 0;         // fill / write-back unit inside a line (0 = the whole line)
   bool operator==(const CacheConfig&) const = default;
+};
+
+struct MemoryLayoutConfig {
+  ArrayLayoutKind array_layout = ArrayLayoutKind::PixelMajor;
+  bool operator==(const MemoryLayoutConfig&) const = default;
+};
+
+// A shared cache level between the partitions and DRAM (l2; l3 behind it).
+struct SharedCacheConfig {
+  uint64_t size_bytes = 0;        // 0 = no such level
+  unsigned ways = 16;
+  unsigned line_bytes = 64;
+  unsigned sector_bytes = 0;      // 0 = the whole line
+  unsigned slices = 1;            // address-hashed, each with its own port
+  unsigned hit_latency = 50;      // cycles
+  double bytes_per_clock = 64.0;  // per slice
+  bool victim_only = false;       // fills only with the level above's evictions
+  bool operator==(const SharedCacheConfig&) const = default;
 };
 
 struct AluConfig {
   unsigned blends_per_clock = 2;  // RGBA8-rate blends per clock per partition
-  unsigned base_latency = 8;      // cycles of one insert
-  unsigned row_latency = 2;       // extra cycles per row read-modify-written
+  unsigned base_latency = 8;      // cycles of one insert (read, blend, write of one row)
+  unsigned cycles_per_compare = 1;    // per row whose depth the insert compares (model::InsertWork)
+  unsigned cycles_per_row_moved = 2;  // per row the insert writes: new, shifted, rescaled, merged
   double fp16_rate = 0.5;         // throughput relative to 8-bit rows
   double fp32_rate = 0.25;
   bool operator==(const AluConfig&) const = default;
+};
+
+// The A-buffer under test (algorithm abuffer; CONFIG.md): its pool, its
+// resolve's local array, and the global node counter's atomic.
+enum class ABufferOverflowPolicy : uint8_t { Spill, Truncate };
+struct ABufferConfig {
+  uint64_t pool_bytes = 0;           // heads + node pool; 0 = nodes_per_pixel x W x H nodes (+ heads)
+  double nodes_per_pixel = 16.0;     // pool size when pool_bytes = 0 [inferred]
+  unsigned max_sorted = 64;          // resolve's local array (nodes per pixel sorted in registers) [inferred]
+  ABufferOverflowPolicy overflow = ABufferOverflowPolicy::Spill;
+  double atomics_per_clock = 1.0;    // node-counter increments per clock for the whole GPU [inferred]
+  unsigned atomic_latency = 100;     // cycles of one counter atomic at the L2 [inferred]
+  unsigned sort_cycles_per_compare = 1;  // resolve's insertion sort
+  unsigned sort_cycles_per_move = 1;
+  unsigned spill_cycles_per_node = 20;   // a node beyond max_sorted: written out and read back [inferred]
+  bool operator==(const ABufferConfig&) const = default;
 };
 
 struct DramConfig {
@@ -82,21 +127,30 @@ struct DramConfig {
   double tck_ns = 1.25;             // DRAM clock period
   unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
   unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
+  unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
+  unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
   unsigned banks = 8;
   unsigned row_bytes = 8192;        // row-buffer size per bank
   unsigned burst_bytes = 64;        // access granularity
   unsigned interleave_bytes = 256;  // channel interleave
-  bool open_row = true;             // keep rows open (hits pay CL only)
+  bool open_row = true;             // keep rows open (hits pay CL only); false: closed page
   bool bank_hash = true;            // XOR-fold the row into the bank index (MEMORY.md)
   double controller_ns = 40.0;      // fixed controller + interconnect latency
-  double trefi_ns = 0.0;            // refresh interval per channel (0: no refresh)
-  double trfc_ns = 0.0;             // refresh cycle time: no data moves, rows close
+  double trefi_ns = 7800.0;         // refresh interval per channel (0: no refresh); DDR3, <= 85 C
+  double trfc_ns = 260.0;           // refresh cycle time: no data moves, rows close; DDR3 4 Gb
+  unsigned write_queue = 64;        // posted-write entries (bursts) per channel
+  unsigned write_high = 56;         // waiting write bursts that start a drain
+  unsigned write_low = 32;          // a drain stops at or below this
+  DramScheduler scheduler = DramScheduler::FrFcfs;
+  unsigned queue_depth = 64;        // bursts per channel the FR-FCFS scheduler looks over
   bool operator==(const DramConfig&) const = default;
 };
 
 struct StatsConfig {
   uint64_t interval_cycles = 10000;  // time-series sample period
   uint64_t max_samples = 16384;      // more: the period doubles (pairs of samples merge)
+  bool miss_classes = true;          // classify the ROP cache's misses (compulsory / capacity / conflict)
+  bool level_miss_classes = false;   // classify the shared levels' (l2, l3) misses too: a costly shadow per level
   bool operator==(const StatsConfig&) const = default;
 };
 
@@ -115,14 +169,17 @@ struct SimConfig {
 };
 
 struct RopConfig {
-  std::string preset = "igpu";
+  std::string preset = "iris-pro-5200";
   ClockConfig clock;
   PartitionConfig partitions;
   InputConfig input;
   EarlyDepthConfig early_depth;
   LockConfig lock;
   CacheConfig cache;
+  MemoryLayoutConfig memory;
+  SharedCacheConfig l2, l3;
   AluConfig alu;
+  ABufferConfig abuffer;
   DramConfig dram;
   StatsConfig stats;
   SkipConfig skip;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "oit_rop/RopPartition.hpp"
+#include "oit_rop/memory/PortCalendar.hpp"
 
 namespace oit::rop {
 
@@ -31,6 +32,17 @@ void ApproximateEngine::run() {
   constexpr size_t kStages = 5;     // every stage but the resolve
   p.flushAccounts();  // every stage idle up to here; the timelines account the phase
   const Cycle start = p.now_;
+  // Root causes (DESIGN.md "Root causes", approximate engine): the partition's
+  // time moves from issue to issue. A span the input's rate decides is the
+  // input's (the ALU's when its blends are booked beyond it); a span a full
+  // scoreboard or a pass's drain decides is shared out in proportion to the
+  // delays the fragments met since the last such span (DelayShares).
+  p.root_.account(p.now_);
+  DelayShares shares;
+  shares.setBusShare([&p](Cycle from, Cycle to) { return p.memory_.busShare(from, to); });
+  Cycle charged = p.now_;  // root causes accounted up to here
+  Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
+  Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
   std::array<StageCycles, kStages> acc;
@@ -41,34 +53,45 @@ void ApproximateEngine::run() {
   }
   constexpr StageStatus kBusy = StageStatus::busy();
   const bool grouped = p.cfg_.lock.per_primitive && p.cfg_.lock.granularity != LockGranularity::Pixel;
-  ReleaseTable locks(p.owned_.size() * p.geo_.lock_per_tile, grouped);
+  // Lock addresses are local tile x addresses per tile + offset, and local
+  // tile numbers run to the largest of the partition's own (not its count:
+  // with tiles_x not a multiple of the partitions, a row holds fewer than
+  // ceil(tiles_x / N) of them). Sized by the count, 3 or 6 partitions wrote
+  // past the table's end.
+  uint32_t local_tiles = 0;
+  for (uint32_t t : p.owned_) local_tiles = std::max(local_tiles, p.geo_.localOf(t) + 1);
+  ReleaseTable locks(size_t(local_tiles) * p.geo_.lock_per_tile, grouped);
   const unsigned cap = p.cfg_.lock.capacity;
   scoreboard_.reset(p.now_);
   waiting_.reset(p.now_);
   // Issue and blend slots in 1/kOne cycles (rates need not be integers).
   const int64_t in_step = std::max<int64_t>(1, int64_t(double(kOne) / p.cfg_.input.fragments_per_clock));
   const double alu_rate = std::max(1e-6, double(p.cfg_.alu.blends_per_clock) * p.s_.format_rate);
-  const int64_t alu_step = std::max<int64_t>(1, int64_t(double(kOne) / alu_rate));
-  int64_t issue_fx = int64_t(p.now_) << kShift, alu_fx = 0;
+  // Blend slots by time: each fragment takes the earliest slot at or after
+  // the cycle its line is there (the cycle engine's ALU serves fragments in
+  // the order they enter the cache stage, i.e. the order their locks admit
+  // them). Handed out in visit (issue) order, a fragment that waited long for
+  // its lock pushed every younger one's blend behind its own: dgpu, particles
+  // 640x360, mlab k = 2 came out +41.8 % (DESIGN.md).
+  PortCalendar alu_slots(alu_rate, 0);
+  int64_t issue_fx = int64_t(p.now_) << kShift;
   const Cycle tail = p.cfg_.lock.release == LockRelease::EndOfShader ? p.cfg_.lock.shader_tail : 0;
   const Cycle depth_latency = p.cfg_.early_depth.latency, hit_latency = p.cfg_.cache.hit_latency;
   // A culled fragment leaves at early depth when early culling is on: its
   // flag masked by this (one test per visit instead of two).
   const uint8_t leaves_early = p.early_cull_ ? InRec::kCulled : 0;
   // What a fragment that reaches the lock does follows from its kind,
-  // culled x 4 + outcome: its blend latency, whether it writes its line and
-  // whether it appends an A-buffer node. Visits are tallied by kind, and
-  // the ALU's counts and the skips' follow from the tallies after the phase.
+  // culled x 4 + outcome: its blend latency, the lines it touches
+  // (FragmentLines) and whether it appends an A-buffer node. Visits are tallied by kind, and
+  // the skips' counts follow from the tallies after the phase; the blend's
+  // latency adds the work the insert reported (InRec::work).
   constexpr unsigned kKinds = 8;
   static_assert(InRec::kCulledKind == 4, "a culled fragment is kind 4: culled x 4 + outcome 0");
   std::array<uint64_t, kKinds> visits{};
-  std::array<Cycle, kKinds> blend_latency{};
-  std::array<uint8_t, kKinds> writes{}, appends{};
+  std::array<uint8_t, kKinds> appends{};
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
     const unsigned outcome = k & 3;
-    blend_latency[k] = p.alu_.latencyOf(culled ? 0u : p.rows_of_[outcome]);
-    writes[k] = !culled && outcome != unsigned(model::InsertOutcome::Discarded);
     appends[k] = !p.s_.bounded && !culled && outcome == unsigned(model::InsertOutcome::Stored);
   }
   ShaderInput::Draw latency = p.shader_.draw(p.pass_);
@@ -91,6 +114,8 @@ void ApproximateEngine::run() {
         if (!p.starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", p.id_));
         retireCalendars(p.now_);
         p.waitForFrontEnd();
+        if (p.now_ > charged) p.root_.add(RootCause::InputStarvation, p.now_ - charged);
+        charged = std::max(charged, p.now_);
         in = q.cursor();
         issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
         gap0 = StageStatus::stall(Stall::InputStarved);
@@ -105,13 +130,15 @@ void ApproximateEngine::run() {
     __builtin_prefetch(&in.at(2 * kLookahead));
     const InRec& ahead = in.at(kLookahead);
     locks.prefetch(ahead.lock);
-    p.cache_.prefetch(ahead.tile);
+    p.cache_.prefetch(p.tileOf(ahead.pixel));
     if (r.flags & InRec::kPassEnd) [[unlikely]] {
       // Pass p+1 starts after pass p drained.
       in.pop();
       q.setHead(in);
       retireCalendars(p.now_);
       if (last_release > p.now_) p.advance(last_release, false);
+      if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+      charged = std::max(charged, p.now_);
       in = q.cursor();
       issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
       scoreboard_.reset(p.now_);
@@ -128,16 +155,32 @@ void ApproximateEngine::run() {
     // free nothing later than fx) are dropped a cycle at a time until the
     // scoreboard is not full or its earliest release is still in flight.
     int64_t fx = issue_fx;
+    const Cycle by_rate = Cycle(issue_fx >> kShift);
+    bool sb_delayed = false;  // a full scoreboard decided the issue
     while (scoreboard_.size() >= cap) {
       if (scoreboard_.dropDue(p.now_)) continue;
       const int64_t freed = int64_t(scoreboard_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;
+        sb_delayed = true;
         gap0 = StageStatus::stall(Stall::ScoreboardFull);
       }
     }
     const Cycle issue = Cycle(fx >> kShift);
     issue_fx = fx + in_step;
+    if (issue > charged) {
+      // Up to the input's slot: the input's (the ALU's where blends queue for
+      // it then: the sink at its rate); then the scoreboard's. When a full
+      // scoreboard decided the issue, all of it is the scoreboard's: a faster
+      // input could not have issued sooner (the cycle engine's rule too).
+      const Cycle rate_end = sb_delayed ? charged : std::clamp(by_rate, charged, issue);
+      const Cycle alu = std::min(rate_end, alu_run_to) > std::max(charged, alu_run_from)
+                            ? std::min(rate_end, alu_run_to) - std::max(charged, alu_run_from) : 0;
+      p.root_.add(RootCause::Alu, alu);
+      p.root_.add(RootCause::Input, rate_end - charged - alu);
+      shares.chargeTo(p.root_, issue - rate_end, RootCause::ScoreboardFull);
+      charged = issue;
+    }
     if (issue > p.now_) {
       if (issue >= p.next_sync_) {  // p.advance() yields: the sampler reads the calendars, the front end the queue
         retireCalendars(p.now_);
@@ -150,6 +193,7 @@ void ApproximateEngine::run() {
     }
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
+    alu_slots.retireBefore(issue);  // no blend of this or a later fragment starts before its issue
 
     const Cycle finish = issue + latency(r.seq);
     last_finish = std::max(last_finish, finish);
@@ -162,7 +206,8 @@ void ApproximateEngine::run() {
     Cycle early = passed;
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
-      early = std::max(early, p.early_.depthTileReady(issue, r.tile) + (finish - issue));
+      early = std::max(early, p.early_.depthTileReady(issue, p.tileOf(r.pixel)) + (finish - issue));
+      if (early > passed) shares.addLike(early - passed, issue, issue + (early - finish), p.last_depth_);
     }
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));
@@ -178,12 +223,15 @@ void ApproximateEngine::run() {
         ls.longest_wait = std::max<uint64_t>(ls.longest_wait, free - early);
         enter = free;
         waiting_.push(enter);
+        shares.add(RootCause::LockWait, free - early);
         // (Only a wait is an interval: stages 1-4 account their gaps at the end.)
         tl[2].addLeavingGap(acc[2], early, enter, StageStatus::stall(Stall::LockWait));
       }
       const unsigned kind = r.outcome & (kKinds - 1);  // culled x 4 + outcome (InRec::kCulledKind)
       ++visits[kind];
-      const bool write = writes[kind];
+      // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
+      const uint32_t tile = p.tileOf(r.pixel);
+      const std::span<const LineTouch> lines = p.linesOf(r.pixel, uint8_t(kind));
       const Cycle lock_enter = enter;
       // Into the cache the next cycle when admitted on arrival, in the release's
       // own cycle when admitted at one (the cycle engine's stage order).
@@ -194,32 +242,58 @@ void ApproximateEngine::run() {
       // its lock wait, which already covered the older fragment that missed.
       Cycle at_cache = issue;
       bool missed;
-      Cycle got = p.cache_.touch(at_cache, r.tile, write, missed);
-      while (got == kNever) [[unlikely]] {  // the miss queue is full: retry when its first entry frees
+      p.memory_.resetProbe();
+      uint64_t misses = p.cache_.stats().misses;
+      Cycle got = p.cache_.touch(at_cache, tile, lines, missed);
+      while (got == kNever) [[unlikely]] {  // the miss queue lacks entries: retry when enough free
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
-        got = p.cache_.touch(at_cache, r.tile, write, missed);
+        p.memory_.resetProbe();
+        misses = p.cache_.stats().misses;
+        got = p.cache_.touch(at_cache, tile, lines, missed);
       }
+      // Waiting for a miss-queue entry: the misses in flight, as the latest one.
+      if (at_cache > issue) shares.addLike(at_cache - issue, miss_from, miss_to, p.last_miss_);
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
-        fill_ready[r.tile] = ready;
+        fill_ready[tile] = ready;
+        p.last_miss_ = p.cache_.stats().misses != misses ? splitWait(at_cache, got, p.memory_.probe(), p.miss_rest_)
+                                                         : WaitSplit{at_cache, at_cache, at_cache, RootCause::RopCacheMiss};
+        miss_from = at_cache;
+        miss_to = got;
+        shares.addWait(at_cache, got, p.last_miss_);
       } else if (got > at_cache + hit_latency) {
-        ready = std::max(ready, fill_ready[r.tile]);
+        const Cycle before = ready;
+        ready = std::max(ready, fill_ready[tile]);
+        shares.addLike(ready - before, miss_from, miss_to, p.last_miss_);
       }
       const Cycle pass_on = std::max(enter, lock_enter + 1) - 1;  // the lock stage's last cycle with it
       if (pass_on > lock_enter) tl[2].addLeavingGap(acc[2], lock_enter, pass_on, StageStatus::stall(Stall::CacheMissWait));
       tl[2].addLeavingGap(acc[2], pass_on, pass_on + 1, kBusy);
       const bool miss = ready > enter + hit_latency;
       tl[3].addLeavingGap(acc[3], enter, ready, miss ? StageStatus::stall(Stall::CacheMissWait) : kBusy);
-      const int64_t slot = std::max(alu_fx, int64_t(ready) << kShift);
-      alu_fx = slot + alu_step;
-      const Cycle at = Cycle(slot >> kShift);
+      Cycle at, slot_end;
+      alu_slots.book(ready, 1, at, slot_end);
+      if (at > ready) {
+        shares.add(RootCause::Alu, at - ready);
+        // Blends queue for the ALU's rate over [alu_run_from, alu_run_to): extend the run or start one.
+        if (ready > alu_run_to) alu_run_from = ready;
+        alu_run_to = std::max(alu_run_to, at);
+      }
       if (at > ready) tl[3].addLeavingGap(acc[3], ready, at, StageStatus::stall(Stall::AluBusy));
-      const Cycle done = at + blend_latency[kind];
-      tl[4].addLeavingGap(acc[4], at, done, kBusy);
+      const bool culled_kind = kind >= 4;
+      const model::InsertWork work = culled_kind ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
+      p.alu_.count(work, culled_kind);
+      const Cycle start = p.blendStart(at, appends[kind]);
+      const Cycle done = start + p.alu_.latency(work);
+      if (start > at) {
+        tl[4].addLeavingGap(acc[4], at, start, StageStatus::stall(Stall::AtomicWait));
+        shares.add(RootCause::Atomics, start - at);  // the A-buffer's node counter
+      }
+      tl[4].addLeavingGap(acc[4], start, done, kBusy);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);
@@ -237,6 +311,8 @@ void ApproximateEngine::run() {
     }
     ++fragments;
   }
+  if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+  p.root_.skipTo(p.now_);
   // Shader busy until the last fragment left it; then every stage idle to the drain.
   tl[0].close(acc[0], last_finish, kBusy);
   for (size_t i = 0; i < kStages; ++i) {
@@ -252,7 +328,6 @@ void ApproximateEngine::run() {
   lock_stats_ = ls;
   for (unsigned k = 0; k < kKinds; ++k) {
     const bool culled = k >= 4;
-    p.alu_.countMany(culled ? 0u : p.rows_of_[k & 3], culled, visits[k]);
     if (culled) p.res_.culled_late += visits[k];
   }
   if (p.merge_skip_) p.res_.merges_skipped += visits[unsigned(model::InsertOutcome::Stored)];

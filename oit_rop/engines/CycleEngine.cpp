@@ -35,7 +35,7 @@ bool CycleEngine::step() {
     if constexpr (Deferred) {
       if (!(k.flags & InRec::kCulled)) p.rmw_->complete(t);  // none: the write lands
     }
-    p.releaseLine(k.tile);  // the blend wrote the line: it may be evicted now
+    p.releaseLines(k.pixel, k.outcome);  // the blend wrote its lines: they may be evicted now
     if (!p.s_.bounded && !(k.flags & InRec::kCulled) && k.outcome == uint8_t(model::InsertOutcome::Stored))
       p.nodeWrite();
     if (p.cfg_.lock.release == LockRelease::EndOfShader)
@@ -65,7 +65,8 @@ bool CycleEngine::step() {
     const RopPartition::TokenInfo& k = p.tok_[e.token];
     const bool drop = (k.flags & InRec::kCulled) != 0;  // late cull: the blend drops it
     p.res_.culled_late += drop;
-    p.alu_.issue(now, e.token, drop ? 0u : k.rows, drop);
+    const bool appends = !p.s_.bounded && !drop && k.outcome == uint8_t(model::InsertOutcome::Stored);
+    p.alu_.issue(now, e.token, k.work, drop, p.blendStart(now, appends));
     ++to_alu;
   }
 
@@ -77,25 +78,25 @@ bool CycleEngine::step() {
     RopPartition::TokenInfo& k = p.tok_[t];
     if constexpr (Deferred) {
       // The insert, when the fragment first reaches the cache port. (A refused
-      // access retries with the outcome it has: its tile is not resident, so no
-      // fragment in flight can write its pixel meanwhile.)
+      // access retries with the outcome it has: its lines are not resident, so
+      // no fragment in flight can write its pixel meanwhile.)
       if (k.flags & InRec::kDeferredInsert) {
-        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, k.tile);
+        const model::InsertOutcome o = p.rmw_->enter(t, p.pass_, p.tileOf(k.pixel));
         k.outcome = uint8_t(o);
-        k.rows = p.rows_of_[size_t(o)];
+        k.work = p.charged(p.rmw_->lastWork(), uint8_t(o));
         k.flags &= uint8_t(~InRec::kDeferredInsert);
         p.res_.merges_skipped += unsigned((o == model::InsertOutcome::Stored) & p.merge_skip_);
       }
     }
-    const bool write = !(k.flags & InRec::kCulled) && k.outcome != uint8_t(model::InsertOutcome::Discarded);
+    // Its lines, as its kind reads and writes them (a late-culled fragment reads only).
     Cycle r = 0;
-    if (!p.acquireGated(now, k.tile, write, r)) {
+    if (!p.acquireGated(now, k.pixel, k.outcome, r)) {
       refused = true;
       break;
     }
     p.lock_.enterFront(now);
     const bool miss = r > now + p.cfg_.cache.hit_latency;
-    p.cache_q_.push({t, r, miss});
+    p.cache_q_.push({t, r, miss, miss ? p.last_miss_ : WaitSplit{}});
     ++accepted;
   }
 
@@ -114,7 +115,7 @@ bool CycleEngine::step() {
   unsigned shaded = 0;
   p.shader_.finished(now, [&](uint32_t t) {
     ++shaded;
-    p.early_.push(now, t, p.tok_[t].tile, (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
+    p.early_.push(now, t, p.tileOf(p.tok_[t].pixel), (p.tok_[t].flags & InRec::kNeedsDepthRead) != 0);
   });
 
   // Issue from the routed input into the shader (needs a scoreboard entry).
@@ -151,8 +152,7 @@ bool CycleEngine::step() {
     // The partition's own lock address (FrameGeometry::lockAddress); owner: the primitive run's first record.
     const uint32_t t = p.lock_.allocate(r.lock, r.seq - r.prim_offset);
     const bool culled = (r.flags & InRec::kCulled) != 0;
-    // Table and selects instead of rowsFor()'s switch: the outcome is random per fragment.
-    const uint8_t rows = culled ? 0 : p.rows_of_[r.outcome & 3];
+    const model::InsertWork work = culled ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
     if constexpr (Deferred) {
       if (r.flags & InRec::kDeferredInsert) {  // its outcome and rows come at lock entry
         Fifo<Fragment>& fq = p.front_.deferred(p.id_);
@@ -162,7 +162,7 @@ bool CycleEngine::step() {
     } else {
       p.res_.merges_skipped += unsigned(!culled & (r.outcome == uint8_t(model::InsertOutcome::Stored)) & p.merge_skip_);
     }
-    p.tok_[t] = RopPartition::TokenInfo{r.tile, r.flags, r.outcome, rows};
+    p.tok_[t] = RopPartition::TokenInfo{r.pixel, r.flags, r.outcome, work};
     p.shader_.issue(now, t, r.seq, p.pass_);
     q.pop();
     p.front_.popped(p.id_);
@@ -204,11 +204,39 @@ bool CycleEngine::step() {
   else if (alu_blocked) c3 = stall(Stall::AluBusy);
   else c3 = occupied ? stall(Stall::InputStarved) : kIdle;
 
-  if (to_alu || p.alu_.inFlight()) c4 = kBusy;
+  if (to_alu || p.alu_.inFlight()) c4 = !p.s_.bounded && p.alu_.allWaitingAt(now) ? stall(Stall::AtomicWait) : kBusy;
   else c4 = occupied ? stall(Stall::InputStarved) : kIdle;
   // (Resolve stays idle through the transparent phase.)
   const uint64_t codes = uint64_t(c0) | uint64_t(c1) << 8 | uint64_t(c2) << 16 | uint64_t(c3) << 24 | uint64_t(c4) << 32;
   if (codes != (p.codes_ & 0xFFFFFFFFFFull)) p.setStatuses(codes, 5);
+
+  // The cycle's root cause (DESIGN.md "Root causes"): a stage at its full rate
+  // bounds the cycle (the blend ALU first: the sink; the input only when the
+  // scoreboard still has room after its issue: else a faster input could not
+  // have issued more, and what holds the entries bounds it); otherwise follow the
+  // back-pressure to what holds the oldest work: the line the cache's head
+  // waits for, a refused access (the latest miss stands for the memory it
+  // waits on), the ordered lock, a depth tile, then the front end, the
+  // scoreboard, and what is left: fixed latencies with nothing to overlap.
+  if (c4 == stall(Stall::AtomicWait)) {
+    p.root_.set(now, RootCause::Atomics);  // every blend in flight waits for the A-buffer's node counter
+  } else if (alu_blocked | ((to_alu != 0) & (to_alu == alu_slots))) {
+    p.root_.set(now, RootCause::Alu);
+  } else if (issued ? (issued == slots) & !p.lock_.full() : (!sb_full & !p.starving_ & !draining & !q.empty())) {
+    p.root_.set(now, RootCause::Input);
+  } else if (head_waits && p.cache_q_.front().miss) {
+    p.root_.setWait(now, p.cache_q_.front().wait);
+  } else if (refused) {
+    p.root_.setWait(now, p.last_miss_);
+  } else if (p.lock_.waiting()) {
+    p.root_.set(now, RootCause::LockWait);
+  } else if (c1 == stall(Stall::CacheMissWait)) {
+    p.root_.setWait(now, p.last_depth_);
+  } else if (p.starving_) {
+    p.root_.set(now, RootCause::InputStarvation);
+  } else {
+    p.root_.set(now, sb_full ? RootCause::ScoreboardFull : RootCause::PipelineLatency);
+  }
 
   // Next cycle at which any stage can move.
   Cycle next = now + 1;

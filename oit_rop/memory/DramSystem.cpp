@@ -3,7 +3,8 @@
 namespace oit::rop {
 
 DramSystem::DramSystem(sc_core::sc_module_name name, const DramConfig& cfg, double core_mhz)
-    : sc_module(name), target("target"), memory_(cfg, core_mhz), clock_(core_mhz) {
+    : sc_module(name), target("target"), memory_(cfg, core_mhz), dram_port_(memory_), entry_(&dram_port_),
+      clock_(core_mhz) {
   target.register_b_transport(this, &DramSystem::b_transport);
 }
 
@@ -14,7 +15,7 @@ void DramSystem::b_transport(int, tlm::tlm_generic_payload& p, sc_core::sc_time&
     p.set_response_status(tlm::TLM_GENERIC_ERROR_RESPONSE);
     return;
   }
-  ext->done = memory_.access(ext->now, p.get_address(), p.get_data_length(), p.is_write(), ext->surface);
+  ext->done = entry_->access(ext->now, p.get_address(), p.get_data_length(), p.is_write(), ext->surface);
   // Loosely timed: the delay annotates when the transfer completes.
   const sc_core::sc_time done = clock_.time(ext->done), stamp = sc_core::sc_time_stamp();
   delay = done > stamp ? done - stamp : sc_core::SC_ZERO_TIME;

@@ -12,19 +12,21 @@ namespace oit::rop {
 
 namespace {
 
-// Converts a non-negative amount of core cycles to ticks, rounding up so that a
-// latency or transfer time is never shorter than configured. Values within
-// 1e-9 (relative) of an integer tick count are taken as that integer: 5.75
-// cycles must not become 5.75 cycles + 1 tick through floating-point noise.
-uint64_t cyclesToTicks(double cycles, unsigned shift) {
-  const double t = std::ldexp(cycles, static_cast<int>(shift));
-  const double r = std::round(t);
-  if (std::fabs(t - r) <= 1e-9 * std::max(1.0, r)) return static_cast<uint64_t>(r);
-  return static_cast<uint64_t>(std::ceil(t));
-}
-
 void require(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("DramConfig: ") + what);
+}
+
+// The geometry the address map needs (a burst never straddles a channel or a
+// row), checked before the map is built from it.
+const DramConfig& checkedGeometry(const DramConfig& cfg) {
+  require(cfg.channels >= 1, "channels must be >= 1");
+  require(cfg.banks >= 1, "banks must be >= 1");
+  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
+  require(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
+          "interleave_bytes must be a multiple of burst_bytes");
+  require(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
+          "row_bytes must be a multiple of burst_bytes");
+  return cfg;
 }
 
 }  // namespace
@@ -41,147 +43,34 @@ uint64_t MemoryStats::writeBytes() const {
   return n;
 }
 
-void MemorySystem::Divisor::set(uint64_t v) {
-  d = v;
-  mask = v - 1;
-  shift = -1;
-  if (v != 0 && (v & (v - 1)) == 0) {
-    shift = 0;
-    while ((uint64_t(1) << shift) != v) ++shift;
-  }
-}
-
-MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz) : cfg_(cfg), core_mhz_(core_mhz) {
-  require(core_mhz > 0, "core_mhz must be > 0");
-  require(cfg.channels >= 1, "channels must be >= 1");
-  require(cfg.banks >= 1, "banks must be >= 1");
-  require(cfg.channel_gbps > 0, "channel_gbps must be > 0");
-  require(cfg.tck_ns > 0, "tck_ns must be > 0");
-  require(cfg.controller_ns >= 0, "controller_ns must be >= 0");
-  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
-  // A burst must stay inside one channel and one row.
-  require(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
-          "interleave_bytes must be a multiple of burst_bytes");
-  require(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
-          "row_bytes must be a multiple of burst_bytes");
-
-  const double cycles_per_ns = core_mhz / 1000.0;
-  ctrl_ticks_ = cyclesToTicks(cfg.controller_ns * cycles_per_ns, kTickShift);
-  cl_ticks_ = cyclesToTicks(cfg.cl * cfg.tck_ns * cycles_per_ns, kTickShift);
-  trcd_ticks_ = cyclesToTicks(cfg.trcd * cfg.tck_ns * cycles_per_ns, kTickShift);
-  trp_ticks_ = cyclesToTicks(cfg.trp * cfg.tck_ns * cycles_per_ns, kTickShift);
-  tras_ticks_ = cyclesToTicks(cfg.tras * cfg.tck_ns * cycles_per_ns, kTickShift);
-  const double burst_cycles = cfg.burst_bytes / bytesPerCyclePerChannel();
-  // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
-  require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
-  burst_ticks_ = cyclesToTicks(burst_cycles, kTickShift);
-  // Closed row: activates of consecutive bursts of one run, after the first two, are this far apart.
-  act_step_ticks_ = std::max(trcd_ticks_ + cl_ticks_ + burst_ticks_, tras_ticks_) + trp_ticks_;
-  require(burst_ticks_ >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
-
-  map_.burst.set(cfg.burst_bytes);
-  map_.interleave.set(cfg.interleave_bytes);
-  map_.channel.set(cfg.channels);
-  map_.row.set(cfg.row_bytes);
-  map_.bank.set(cfg.banks);
-  map_.chunk_bursts.set(cfg.interleave_bytes / cfg.burst_bytes);
-  map_.row_bursts.set(cfg.row_bytes / cfg.burst_bytes);
-  map_.multi_channel = cfg.channels > 1;
-  map_.hash = cfg.bank_hash && cfg.banks > 1;
-  map_.pow2 = map_.burst.shift >= 0 && map_.chunk_bursts.shift >= 0 && map_.channel.shift >= 0 &&
-              map_.row_bursts.shift >= 0 && map_.bank.shift >= 0;
-
-  if (cfg.trefi_ns > 0) {
-    const std::string problem = refreshProblem(cfg, core_mhz);
-    require(problem.empty(), problem.c_str());
-    refresh_period_ = cyclesToTicks(cfg.trefi_ns * cycles_per_ns, kTickShift);
-    refresh_rfc_ = cyclesToTicks(cfg.trfc_ns * cycles_per_ns, kTickShift);
-    for (unsigned c = 0; c < cfg.channels; ++c) refresh_off_.push_back(refresh_period_ * c / cfg.channels);
-  }
-  bus_free_.assign(cfg.channels, 0);
-  busy_ticks_.assign(cfg.channels, 0);
+MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
+    : cfg_(checkedGeometry(cfg)), map_(cfg_), t_(cfg_, core_mhz) {
+  require(cfg.write_queue >= 1 && cfg.write_high >= 1 && cfg.write_high <= cfg.write_queue &&
+              cfg.write_low < cfg.write_high,
+          "write watermarks must satisfy write_low < write_high <= write_queue");
+  channels_.assign(cfg.channels, Channel(cfg));
+  window_ = cfg.scheduler == DramScheduler::FrFcfs ? cfg.queue_depth : 0;
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
 }
 
-std::string MemorySystem::refreshProblem(const DramConfig& cfg, double core_mhz) {
-  if (cfg.trefi_ns == 0) return {};
-  if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
-    return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
-  // The longest run of bursts booked as one (open rows: a row, on a bank the
-  // refresh left closed; closed rows: one burst) must fit between two
-  // refreshes: runs are placed whole (MEMORY.md).
-  const double cycles_per_ns = core_mhz / 1000.0;
-  const auto ticks = [&](double ns) { return cyclesToTicks(ns * cycles_per_ns, kTickShift); };
-  const uint64_t cl = ticks(cfg.cl * cfg.tck_ns), trcd = ticks(cfg.trcd * cfg.tck_ns);
-  const uint64_t burst = ticks(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
-  const uint64_t bursts = cfg.burst_bytes ? std::max<uint64_t>(1, cfg.row_bytes / cfg.burst_bytes) : 1;
-  const uint64_t run = cfg.open_row ? trcd + cl + bursts * burst : trcd + cl + burst;
-  const uint64_t period = ticks(cfg.trefi_ns), rfc = ticks(cfg.trfc_ns);
-  if (rfc < period && period - rfc >= run) return {};
-  return fmt::format(
-      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must be at least the longest transfer booked as one, {} "
-      "({:.1f} ns here)",
-      cfg.trefi_ns, cfg.trfc_ns,
-      cfg.open_row ? fmt::format("a row of {} bytes on a closed bank", cfg.row_bytes) : std::string("one burst"),
-      std::ldexp(double(run), -int(kTickShift)) / cycles_per_ns);
-}
+double MemorySystem::bytesPerCyclePerChannel() const { return t_.bytes_per_cycle; }
+double MemorySystem::peakBytesPerCycle() const { return t_.bytes_per_cycle * cfg_.channels; }
 
-double MemorySystem::bytesPerCyclePerChannel() const {
-  // GB/s / (cycles/s): channel_gbps * 1e9 / (core_mhz * 1e6)
-  return cfg_.channel_gbps * 1000.0 / core_mhz_;
-}
-
-double MemorySystem::peakBytesPerCycle() const { return bytesPerCyclePerChannel() * cfg_.channels; }
-
-double MemorySystem::controllerCycles() const { return std::ldexp(double(ctrl_ticks_), -int(kTickShift)); }
-double MemorySystem::clCycles() const { return std::ldexp(double(cl_ticks_), -int(kTickShift)); }
-double MemorySystem::trcdCycles() const { return std::ldexp(double(trcd_ticks_), -int(kTickShift)); }
-double MemorySystem::trpCycles() const { return std::ldexp(double(trp_ticks_), -int(kTickShift)); }
-double MemorySystem::trasCycles() const { return std::ldexp(double(tras_ticks_), -int(kTickShift)); }
-double MemorySystem::burstCycles() const { return std::ldexp(double(burst_ticks_), -int(kTickShift)); }
+double MemorySystem::controllerCycles() const { return DramTimings::cycles(t_.ctrl); }
+double MemorySystem::clCycles() const { return DramTimings::cycles(t_.cl); }
+double MemorySystem::trcdCycles() const { return DramTimings::cycles(t_.trcd); }
+double MemorySystem::trpCycles() const { return DramTimings::cycles(t_.trp); }
+double MemorySystem::trasCycles() const { return DramTimings::cycles(t_.tras); }
+double MemorySystem::burstCycles() const { return DramTimings::cycles(t_.burst); }
+double MemorySystem::twtrCycles() const { return DramTimings::cycles(t_.twtr); }
+double MemorySystem::trtwCycles() const { return DramTimings::cycles(t_.trtw); }
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
-// Inline: book() calls it once per run of bursts.
-template <bool Pow2>
-inline void MemorySystem::bankRow(const Divisor& bank, bool hash, uint64_t row_line, unsigned& bank_out,
-                                  uint64_t& row_out) {
-  uint64_t bk = bank.mod<Pow2>(row_line);
-  const uint64_t rw = bank.div<Pow2>(row_line);
-  // Permutation interleaving (dram.bank_hash): the row's bank-sized digit
-  // groups are XORed into the bank (banks a power of two; else their sum is
-  // added, mod banks). For a fixed row the map stays a bijection of the banks,
-  // so a sequential stream still walks all of them, but streams whose
-  // addresses differ only in high bits (one region per partition and
-  // surface) stop meeting in one bank on different rows.
-  if (hash) {
-    if (bank.shift > 0) {
-      for (uint64_t r = rw; r != 0; r >>= bank.shift) bk ^= r & bank.mask;
-    } else {
-      uint64_t sum = bk;
-      for (uint64_t r = rw; r != 0; r = bank.div(r)) sum += bank.mod(r);
-      bk = bank.mod(sum);
-    }
-  }
-  bank_out = static_cast<unsigned>(bk);
-  row_out = rw;
-}
-
-MemorySystem::Location MemorySystem::AddressMap::locate(uint64_t addr) const {
-  // addr = [row | bank | column-high | channel | column-low(interleave)]
-  const uint64_t chunk = interleave.div(addr);
-  const uint64_t local = channel.div(chunk) * interleave.d + interleave.mod(addr);
-  Location loc{static_cast<unsigned>(channel.mod(chunk)), 0, 0};
-  bankRow<false>(bank, hash, row.div(local), loc.bank, loc.row);
-  return loc;
-}
-
-MemorySystem::Location MemorySystem::locate(uint64_t addr) const { return map_.locate(addr); }
-
-unsigned MemorySystem::channelOf(uint64_t addr) const { return locate(addr).channel; }
-unsigned MemorySystem::bankOf(uint64_t addr) const { return locate(addr).bank; }
-uint64_t MemorySystem::rowOf(uint64_t addr) const { return locate(addr).row; }
+unsigned MemorySystem::channelOf(uint64_t addr) const { return map_.locate(addr).channel; }
+unsigned MemorySystem::bankOf(uint64_t addr) const { return map_.locate(addr).bank; }
+uint64_t MemorySystem::rowOf(uint64_t addr) const { return map_.locate(addr).row; }
 
 void MemorySystem::setSampleInterval(Cycle interval_cycles) {
   sample_interval_ = interval_cycles;
@@ -230,30 +119,14 @@ Cycle MemorySystem::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   const unsigned si = static_cast<unsigned>(s);
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   ++stats_.requests;
-  return map_.pow2 ? book<true>(now, addr, bytes) : book<false>(now, addr, bytes);
+  return map_.pow2 ? book<true>(now, addr, bytes, write) : book<false>(now, addr, bytes, write);
 }
 
 template <bool Pow2>
-Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
-  // The stores below could alias members, so the compiler reloads members after
-  // them; a few scalars every run uses are copied. Copying more (the whole
-  // address map and every timing, as before) cost more per call than the
-  // reloads: most of it lands on the stack anyway.
-  const Divisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
-  const Divisor &row_div = map_.row_bursts, &bank_div = map_.bank;
-  const bool multi_channel = map_.multi_channel, hash = map_.hash;
-  const bool open_row = cfg_.open_row;
-  const bool closed_refresh = !open_row && refresh_period_ != 0;
-  const unsigned banks = cfg_.banks;
-  const uint64_t cl = cl_ticks_, burst = burst_ticks_;
-  const uint64_t &trcd = trcd_ticks_, &trp = trp_ticks_, &tras = tras_ticks_, &act_step = act_step_ticks_;
-  uint64_t* const bus_free = bus_free_.data();
-  uint64_t* const busy_ticks = busy_ticks_.data();
-  Cycle* const channel_busy = stats_.channel_busy.data();
-  Bank* const bank_state = banks_.data();
-  uint64_t hits = 0, misses = 0;
-
-  const uint64_t arrive = (uint64_t(now) << kTickShift) + ctrl_ticks_;
+Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
+  const DramDivisor &chunk_div = map_.chunk_bursts, &channel_div = map_.channel;
+  const DramDivisor& row_div = map_.row_bursts;
+  const uint64_t arrive = (uint64_t(now) << kTickShift) + t_.ctrl;
   uint64_t done = arrive;
   const uint64_t first = map_.burst.div<Pow2>(addr);
   const uint64_t last = map_.burst.div<Pow2>(addr + bytes - 1);
@@ -261,25 +134,16 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
   // request's bursts on one channel are one range of local bursts. It is booked
   // channel by channel, in address order inside a channel, a run of bursts
   // sharing bank and row (up to the row's end) at a time: channels share no
-  // state but sums and maxima, so this gives the times of booking burst by
-  // burst in address order. Per burst the formulas of MEMORY.md apply; inside
-  // a run they reduce to a closed form, which gives the same times:
-  // - open row: the first burst hits or opens the row; the others hit it and
-  //   their column command issues at the same tick (row_ready, >= arrive, does
-  //   not change), so each waits only for the bus, i.e. the previous burst's end;
-  // - closed row: each further burst activates once the previous one's data
-  //   ended and its row was open tRAS, plus tRP (a bank's last_end never
-  //   exceeds its channel's bus_free, so last_end is that data's end); its data
-  //   then starts tRCD + CL later, after the bus is free. From the second burst
-  //   on the bus never delays it, so activates are act_step apart.
+  // state but sums and maxima, so the order across channels changes nothing.
   // (Booked per interleave chunk, a 2 KiB line on the presets was 8 runs; now 2.)
   const uint64_t chunk_bursts = chunk_div.d, row_bursts = row_div.d, channels = channel_div.d;
   const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
-  const uint64_t touched_channels = multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  const uint64_t touched_channels = map_.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
+  uint64_t most_bursts = 0;  // on one channel (the probe's transfer)
   for (uint64_t j = 0; j < touched_channels; ++j) {
     unsigned ch = 0;
     uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
-    if (multi_channel) {
+    if (map_.multi_channel) {
       const uint64_t k = k0 + j;                                       // the channel's first chunk
       const uint64_t kl = k + channel_div.div<Pow2>(k1 - k) * channels;  // and its last
       ch = static_cast<unsigned>(channel_div.mod<Pow2>(k));
@@ -288,121 +152,232 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes) {
       lb = channel_div.div<Pow2>(k) * chunk_bursts + chunk_div.mod<Pow2>(b_first);
       hi = channel_div.div<Pow2>(kl) * chunk_bursts + chunk_div.mod<Pow2>(b_last);
     }
+    most_bursts = std::max(most_bursts, hi - lb + 1);
     while (lb <= hi) {
-      // (Closed rows with refresh: a run per burst, each with its own activate,
-      // so refreshes fall between bursts; without refresh the closed form of a
-      // run gives the same times.)
-      const uint64_t n = closed_refresh ? 1 : std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
+      const uint64_t n = std::min(hi - lb + 1, row_bursts - row_div.mod<Pow2>(lb));
       unsigned bank_no;
       uint64_t row;
-      bankRow<Pow2>(bank_div, hash, row_div.div<Pow2>(lb), bank_no, row);
+      map_.bankRow<Pow2>(row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
-      Bank& bank = bank_state[size_t(ch) * banks + bank_no];
-      // With refresh the run is placed whole between two refreshes: when it
-      // would meet one, it is placed again after it, on the bank the refresh
-      // left closed (b, a copy, starts from the committed state on every try;
-      // without refresh b is the bank itself: one try).
-      Bank copy;
-      Bank& b = refresh_period_ ? copy : bank;
-      uint64_t earliest = arrive;   // no command of the run before this
-      uint64_t column;              // tick the run's first column command (read or write) issues
-      uint64_t act = 0;             // closed row: the first burst's activate
-      uint64_t xfer, last_xfer, second_xfer, run_hits, run_misses;
-      bool refreshed = false;       // a refresh closed the bank's row
-      for (unsigned tries = 0;; ++tries) {
-        uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
-        if (refresh_period_) {
-          if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
-          b = bank;
-          // A refresh since the row was opened closed it.
-          if (open_row && b.open_row != kNoRow) {
-            const uint64_t w = lastRefreshStart(ch, std::max(earliest, b.row_ready));
-            if (w > b.act) {
-              refreshed = true;
-              earliest = std::max(earliest, w + refresh_rfc_);
-            }
-          }
-          if (refreshed) b.open_row = kNoRow;
-        }
-        if (open_row) {
-          if (b.open_row == row) {
-            run_hits = n;
-            run_misses = 0;
-            column = std::max(earliest, b.row_ready);
-            first_cmd = column;
-          } else {
-            run_hits = n - 1;
-            run_misses = 1;
-            // Precharge may start once the open row is active, its transfers ended
-            // and it has been open tRAS.
-            uint64_t start = std::max({earliest, b.row_ready, b.last_end});
-            first_cmd = start;
-            if (b.open_row != kNoRow) {
-              first_cmd = std::max(start, b.act + tras);
-              start = first_cmd + trp;
-            }
-            b.open_row = row;
-            b.act = start;
-            b.row_ready = start + trcd;
-            column = b.row_ready;
-          }
-        } else {
-          run_hits = 0;
-          run_misses = n;  // every access activates its row
-          act = std::max(earliest, b.act_ready);
-          column = act + trcd;
-          first_cmd = act;
-        }
-        xfer = std::max(column + cl, bus_free[ch]);  // the first burst's bus start
-        last_xfer = xfer;
-        second_xfer = 0;
-        if (open_row) {
-          last_xfer = xfer + (n - 1) * burst;
-        } else if (n > 1) {
-          const uint64_t act1 = std::max(xfer + burst, act + tras) + trp;
-          second_xfer = act1 + trcd + cl;
-          act = act1 + (n - 2) * act_step;  // the run's last activate
-          last_xfer = act + trcd + cl;
-        }
-        if (!refresh_period_) break;
-        const uint64_t after = refreshOverlapEnd(ch, first_cmd, last_xfer + burst);
-        if (!after) break;
-        earliest = after;
-        refreshed = true;
-      }
-      if (refresh_period_) bank = b;
-      hits += run_hits;
-      misses += run_misses;
-      const uint64_t end = last_xfer + burst;
-      bus_free[ch] = end;
-      if (sample_interval_) {
-        // Usually the whole run starts in the bucket of the previous one.
-        const Cycle c_first = xfer >> kTickShift, c_last = last_xfer >> kTickShift;
-        if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_) {
-          stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
-        } else if (open_row || n == 1) {
-          sampleBursts(xfer, n, burst);
-        } else {
-          sampleBursts(xfer, 1, 0);
-          sampleBursts(second_xfer, n - 1, act_step);
-        }
-      }
-      bank.last_end = std::max(bank.last_end, end);
-      if (!open_row) {
-        // Auto-precharge after the data, once the row was open tRAS.
-        bank.act = act;
-        bank.act_ready = std::max(bank.last_end, act + tras) + trp;
-      }
-      busy_ticks[ch] += n * burst;
-      channel_busy[ch] = (busy_ticks[ch] + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
-      done = std::max(done, end);
+      done = std::max(done, write ? postWrite(ch, bank_no, row, n, arrive) : bookRun<false>(ch, bank_no, row, n, arrive));
     }
   }
-  stats_.row_hits += hits;
-  stats_.row_misses += misses;
-  const Cycle completion = (done + (uint64_t(1) << kTickShift) - 1) >> kTickShift;
+  stats_.row_hits = hits_;
+  stats_.row_misses = misses_;
+  const Cycle completion = DramTimings::ceilCycles(done);
+  stats_.last_completion = std::max(stats_.last_completion, completion);
+  if (completion >= probe_.done)
+    probe_ = {completion, unloadedCycles(write), write ? 0 : transferCycles(most_bursts)};
+  return completion;
+}
+
+void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
+  // Split at block boundaries (a long run spans several).
+  constexpr unsigned shift = kTickShift + kBusyBlockShift;
+  for (uint64_t at = from_tick, end = from_tick + len; at < end;) {
+    const uint64_t block = at >> shift, block_end = (block + 1) << shift;
+    const uint64_t part = std::min(end, block_end) - at;
+    if (block >= busy_blocks_.size()) busy_blocks_.resize(std::max<size_t>(block + 1, busy_blocks_.size() * 2), 0);
+    busy_blocks_[block] += part;
+    at += part;
+  }
+}
+
+double MemorySystem::busShare(Cycle from, Cycle to) const {
+  if (to <= from) return 0.0;
+  // Whole blocks overlapping the span, weighted by the overlap.
+  const uint64_t block_cycles = uint64_t(1) << kBusyBlockShift;
+  double busy = 0.0;
+  for (Cycle b = from >> kBusyBlockShift; b <= (to - 1) >> kBusyBlockShift; ++b) {
+    const Cycle lo = std::max<Cycle>(from, b << kBusyBlockShift), hi = std::min<Cycle>(to, (b + 1) << kBusyBlockShift);
+    const double ticks = b < busy_blocks_.size() ? double(busy_blocks_[b]) : 0.0;
+    busy += ticks / double(uint64_t(1) << kTickShift) * double(hi - lo) / double(block_cycles);
+  }
+  return std::min(1.0, busy / (double(to - from) * double(channels_.size())));
+}
+
+Cycle MemorySystem::transferCycles(uint64_t bursts) const {
+  return bursts > 1 ? DramTimings::ceilCycles((bursts - 1) * t_.burst) : 0;
+}
+
+Cycle MemorySystem::unloadedCycles(bool write) const {
+  // Ticks, rounded up once (as a request's completion is).
+  if (write) return DramTimings::ceilCycles(t_.ctrl);
+  return DramTimings::ceilCycles(t_.ctrl + t_.trcd + t_.cl + t_.burst);
+}
+
+uint64_t MemorySystem::postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive) {
+  DramWriteQueue& q = channels_[ch].writes;
+  // A run that does not fit beside the waiting writes drains them (the
+  // controller switches to writes), then waits for room: entries free as
+  // drained data reaches the bus.
+  if (q.wouldOverflow(n)) drainBatch(ch, arrive, true);
+  const uint64_t accepted = q.roomAt(arrive, n);
+  q.add({bank_no, row, n, accepted});
+  if (q.atHighWatermark()) drainBatch(ch, accepted, false);
+  return accepted;
+}
+
+void MemorySystem::drainBatch(unsigned ch, uint64_t at, bool all) {
+  DramWriteQueue& q = channels_[ch].writes;
+  // takeBatch() returns the queue's own vector: bookRun does not touch the queue.
+  for (const DramWriteQueue::Run& r : q.takeBatch(all))
+    q.drained(bookRun<true>(ch, r.bank, r.row, r.bursts, std::max(at, r.accepted)), r.bursts);
+}
+
+Cycle MemorySystem::drainWrites(Cycle now) {
+  const uint64_t at = uint64_t(now) << kTickShift;
+  uint64_t done = at;
+  for (unsigned ch = 0; ch < channels_.size(); ++ch) {
+    if (!channels_[ch].writes.empty()) drainBatch(ch, at, true);
+    done = std::max(done, channels_[ch].last_write_end);
+  }
+  stats_.row_hits = hits_;
+  stats_.row_misses = misses_;
+  const Cycle completion = DramTimings::ceilCycles(done);
   stats_.last_completion = std::max(stats_.last_completion, completion);
   return completion;
+}
+
+template <bool Write>
+uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest) {
+  if (n > t_.max_run_bursts) {
+    // Too long for the time between two refreshes (a very slow channel):
+    // booked in parts; a later part hits the row the earlier one opened
+    // unless a refresh closed it (closed page: each part activates it).
+    uint64_t end = 0;
+    for (uint64_t left = n; left > 0;) {
+      const uint64_t k = std::min(left, t_.max_run_bursts);
+      end = bookRun<Write>(ch, bank_no, row, k, earliest);
+      left -= k;
+    }
+    return end;
+  }
+  Channel& c = channels_[ch];
+  Bank& bank = banks_[size_t(ch) * cfg_.banks + bank_no];
+  const uint64_t arrive = earliest;
+  const uint64_t cl = t_.cl, burst = t_.burst, trcd = t_.trcd, trp = t_.trp, tras = t_.tras;
+  const uint64_t refresh_period = t_.refresh_period;
+  const bool open_row = cfg_.open_row;
+  // Turnarounds: a read command waits tWTR after the last write data; write
+  // data leaves tRTW of idle bus after the last read data.
+  const uint64_t bus_floor = Write ? std::max(c.bus_free, c.last_read_end + t_.trtw) : c.bus_free;
+  const uint64_t column_floor = Write ? 0 : c.last_write_end + t_.twtr;
+  // The run's first burst hits or opens the row (closed page: activates it,
+  // the bank being precharged); the others hit it and their column command
+  // issues at the same tick, so each waits only for the bus, i.e. the
+  // previous burst's end. A closed page auto-precharges after the run's last
+  // burst. With refresh the run is placed whole between two refreshes: when it
+  // would meet one, it is placed again after it, on the bank the refresh left
+  // closed (b, a copy, starts from the committed state on every try; without
+  // refresh b is the bank itself: one try).
+  Bank copy;
+  Bank& b = refresh_period ? copy : bank;
+  uint64_t column;   // tick the run's first column command (read or write) issues
+  uint64_t act = 0;  // closed page: the run's activate
+  uint64_t xfer, run_hits;
+  const uint64_t len = n * burst;
+  bool refreshed = false;  // a refresh closed the bank's row
+  size_t gap = 0;
+  bool in_gap = false;  // the run's data goes into idle bus time before the latest booking
+  for (unsigned tries = 0;; ++tries) {
+    uint64_t first_cmd;  // the run's first command on the bank (precharge, activate or column)
+    if (refresh_period) {
+      if (tries > 64) throw std::logic_error("MemorySystem: a run does not fit between two refreshes");
+      b = bank;
+      // A refresh since the row was opened closed it.
+      if (open_row && b.open_row != kNoRow) {
+        const uint64_t w = t_.lastRefreshStart(ch, std::max(earliest, b.row_ready));
+        if (w > b.act) {
+          refreshed = true;
+          earliest = std::max(earliest, w + t_.refresh_rfc);
+        }
+      }
+      if (refreshed) b.open_row = kNoRow;
+    }
+    if (open_row) {
+      if (b.open_row == row) {
+        run_hits = n;
+        column = std::max(earliest, b.row_ready);
+        first_cmd = column;
+      } else {
+        run_hits = n - 1;
+        // Precharge may start once the open row is active, its transfers ended
+        // and it has been open tRAS.
+        uint64_t start = std::max({earliest, b.row_ready, b.last_end});
+        first_cmd = start;
+        if (b.open_row != kNoRow) {
+          first_cmd = std::max(start, b.act + tras);
+          start = first_cmd + trp;
+        }
+        b.open_row = row;
+        b.act = start;
+        b.row_ready = start + trcd;
+        column = b.row_ready;
+      }
+    } else {
+      run_hits = n - 1;
+      act = std::max(earliest, b.act_ready);
+      column = act + trcd;
+      first_cmd = act;
+    }
+    xfer = std::max(std::max(column, column_floor) + cl, bus_floor);  // the first burst's bus start
+    // A read the bus would delay may take a gap the bus left idle before its
+    // latest booking (FR-FCFS within the window, or any scheduler for a read
+    // that arrived before the one that left the gap), never moving a booking.
+    // Its bank timing is the same; with refresh only when no window lies
+    // between its first command and its data's end.
+    if (!Write && !refreshed && column + cl < xfer && c.gaps.latestEnd() >= column + cl + len) {
+      const DramBusGaps::Asker asker{arrive, c.booked, window_};
+      const uint64_t start = c.gaps.find(asker, column + cl, len, t_.twtr + cl, t_.trtw, gap);
+      if (start != DramBusGaps::kNone && start < xfer &&
+          (!refresh_period || !t_.refreshOverlapEnd(ch, first_cmd, start + len))) {
+        xfer = start;
+        in_gap = true;
+        break;
+      }
+    }
+    if (!refresh_period) break;
+    const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, xfer + len);
+    if (!after) break;
+    earliest = after;
+    refreshed = true;
+  }
+  if (refresh_period) bank = b;
+  hits_ += run_hits;
+  misses_ += n - run_hits;
+  const uint64_t end = xfer + len;
+  if (in_gap) {
+    c.gaps.take(gap, xfer, len, burst);
+  } else {
+    // Idle bus before this run (its bank or a turnaround held it back, or it
+    // came late) is a gap a later read may take.
+    if (xfer >= c.bus_free + burst)
+      c.gaps.add({c.bus_free, xfer, c.booked, arrive, c.last_was_write, Write});
+    c.bus_free = end;
+    c.last_was_write = Write;
+  }
+  c.booked += n;
+  uint64_t& last_end = Write ? c.last_write_end : c.last_read_end;
+  last_end = std::max(last_end, end);
+  if (sample_interval_) {
+    // Usually the whole run starts in the bucket of the previous one.
+    const Cycle c_first = xfer >> kTickShift, c_last = (end - burst) >> kTickShift;
+    if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_)
+      stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
+    else
+      sampleBursts(xfer, n, burst);
+  }
+  bank.last_end = std::max(bank.last_end, end);
+  if (!open_row) {
+    // Auto-precharge after the run's data, once the row was open tRAS.
+    bank.act = act;
+    bank.act_ready = std::max(bank.last_end, act + tras) + trp;
+  }
+  c.busy += len;
+  addBusy(xfer, len);
+  stats_.channel_busy[ch] = DramTimings::ceilCycles(c.busy);
+  return end;
 }
 
 }  // namespace oit::rop

@@ -1,11 +1,16 @@
-// The DRAM behind every ROP partition: channels with bandwidth, latency, banks
-// and an open-row policy (parameters: DramConfig, from the presets).
+// The DRAM controller behind every ROP partition: channels with bandwidth,
+// latency and banks, open-row or closed-page policy, read/write turnaround,
+// posted writes drained in batches, refresh (parameters: DramConfig, from the
+// presets; what is modelled and what is approximated: MEMORY.md).
 //
-// Reservation style, no event queue: access() books the request on its channel
-// and bank at the requested cycle and returns the cycle its data is delivered
-// (read) or written (write). Requests must arrive with non-decreasing `now` per
-// caller; different callers (partitions running ahead within a SystemC quantum)
-// may interleave slightly out of order, which the model tolerates.
+// Reservation style, no event queue: access() books the request at the
+// requested cycle and returns at once the cycle its data is delivered (read)
+// or the cycle the controller accepted it (write: posted into the channel's
+// write queue, written later in a batch; drainWrites() at the end of the
+// frame writes what is left). Requests must arrive with non-decreasing `now`
+// per caller; different callers (partitions running ahead within a SystemC
+// quantum) may interleave slightly out of order, which the model tolerates. A
+// booking is never moved once its cycle was returned.
 #pragma once
 
 #include <algorithm>
@@ -15,6 +20,11 @@
 #include <vector>
 
 #include "oit_rop/config/RopConfig.hpp"
+#include "oit_rop/memory/DramAddressMap.hpp"
+#include "oit_rop/memory/DramBusGaps.hpp"
+#include "oit_rop/memory/DramTimings.hpp"
+#include "oit_rop/memory/DramWriteQueue.hpp"
+#include "oit_rop/RootCause.hpp"
 #include "oit_rop/Types.hpp"
 
 namespace oit::rop {
@@ -40,8 +50,14 @@ class MemorySystem {
  public:
   MemorySystem(const DramConfig& cfg, double core_mhz);
   // Books a transfer of `bytes` at `addr` (split into bursts, interleaved over
-  // channels by interleave_bytes). Returns the completion cycle (>= now + latency).
+  // channels by interleave_bytes). Returns the cycle a read's data is
+  // delivered, or the cycle a write was accepted into the write queues
+  // (>= now + controller latency).
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s);
+  // Writes every write still waiting in the write queues (booked from `now`,
+  // the end of a partition's frame) and returns the cycle by which every write
+  // accepted so far has its data in DRAM (>= now).
+  Cycle drainWrites(Cycle now);
   const MemoryStats& stats() const;
   // Enables MemoryStats::bus_bytes_per_interval (0 disables it).
   void setSampleInterval(Cycle interval_cycles);
@@ -50,14 +66,29 @@ class MemorySystem {
   void coarsenSamples();
   // Peak bytes per core cycle the channels can move together.
   double peakBytesPerCycle() const;
-  // "" when dram.trefi_ns / trfc_ns are usable at core_mhz, else what is wrong
-  // (the time between two refreshes must hold one row's transfer, MEMORY.md).
-  static std::string refreshProblem(const DramConfig& cfg, double core_mhz);
+  // Root-cause split of a wait (RootCause.hpp): the request completing last
+  // since resetProbe(), with its latency: the cycles an idle controller takes
+  // to its first data (a read: controller + tRCD + CL + one burst, the bank
+  // precharged; a posted write: the controller accepting it), and the
+  // transfer of its further bursts on its busiest channel at the bus's rate.
+  // The rest of a wait is queueing. Queueing and transfer are bandwidth (the
+  // same bytes on a wider or idle bus take less), the first data latency.
+  void resetProbe() { probe_ = DramProbe{}; }
+  const DramProbe& probe() const { return probe_; }
+  Cycle unloadedCycles(bool write) const;
+  // The share of the channels' data-bus time busy over [from, to) (0 to 1),
+  // from a record of the bus time booked per block of kBusyBlock cycles: the
+  // part of a wait's unloaded access during which the buses moved other data
+  // is bandwidth, not latency (RootCause.hpp). Bookings still to come for the
+  // span (a partition a quantum behind) are not in it yet.
+  double busShare(Cycle from, Cycle to) const;
+  static constexpr unsigned kBusyBlockShift = 8;  // 256 cycles
+  Cycle transferCycles(uint64_t bursts) const;  // bursts - 1 beyond the first, rounded up
 
   // Added accessors (derived timing, for tests, reports and callers that
   // want the unloaded latency). Cycles are the exact fractional values the
   // model books with (sub-cycle fixed point, see MEMORY.md).
-  unsigned channels() const { return static_cast<unsigned>(bus_free_.size()); }
+  unsigned channels() const { return static_cast<unsigned>(channels_.size()); }
   double bytesPerCyclePerChannel() const;
   double controllerCycles() const;
   double clCycles() const;
@@ -65,6 +96,10 @@ class MemorySystem {
   double trpCycles() const;
   double trasCycles() const;
   double burstCycles() const;  // data-bus time of one burst
+  double twtrCycles() const;   // end of write data to a read command
+  double trtwCycles() const;   // idle bus between read data and write data
+  // Write bursts waiting in channel c's queue (not yet booked on the bus).
+  uint64_t pendingWriteBursts(unsigned c) const { return channels_[c].writes.pendingBursts(); }
   // Address mapping (MEMORY.md): channel, bank and row of a byte address.
   unsigned channelOf(uint64_t addr) const;
   unsigned bankOf(uint64_t addr) const;
@@ -75,25 +110,10 @@ class MemorySystem {
   size_t last_bucket_ = 0;  // bus_bytes_per_interval index of [bucket_begin_, + sample_interval_)
   static constexpr Cycle kNoBucket = ~Cycle(0);
   Cycle bucket_begin_ = kNoBucket;
-  // Time inside the model is kept in ticks: 1 core cycle = 2^kTickShift ticks,
-  // so fractional DRAM timings and bandwidths do not accumulate rounding.
-  static constexpr unsigned kTickShift = 16;
+  // Time inside the model is kept in ticks (DramTimings): fractional DRAM
+  // timings and bandwidths do not accumulate rounding.
+  static constexpr unsigned kTickShift = DramTimings::kTickShift;
   static constexpr uint64_t kNoRow = ~uint64_t(0);
-
-  // Division by a configuration constant; a shift/mask when it is a power of two.
-  struct Divisor {
-    uint64_t d = 1;
-    uint64_t mask = 0;  // d - 1
-    int shift = 0;      // -1: not a power of two
-    void set(uint64_t v);
-    uint64_t div(uint64_t x) const { return shift >= 0 ? x >> shift : x / d; }
-    uint64_t mod(uint64_t x) const { return shift >= 0 ? x & mask : x % d; }
-    // Pow2: the caller knows d is a power of two (no test per operation).
-    template <bool Pow2>
-    uint64_t div(uint64_t x) const { return Pow2 ? x >> shift : div(x); }
-    template <bool Pow2>
-    uint64_t mod(uint64_t x) const { return Pow2 ? x & mask : mod(x); }
-  };
 
   struct Bank {
     uint64_t open_row = kNoRow;  // open-row policy only
@@ -103,59 +123,46 @@ class MemorySystem {
     uint64_t act = 0;            // ticks: the last activate (tRAS counts from it)
   };
 
-  struct Location {
-    unsigned channel;
-    unsigned bank;
-    uint64_t row;
+  // One channel: its data bus, its turnaround state, the idle stretches a
+  // later read may take (DramBusGaps) and its write queue.
+  struct Channel {
+    uint64_t bus_free = 0;  // ticks: end of the latest data on the bus
+    uint64_t busy = 0;      // ticks of data moved
+    uint64_t last_read_end = 0, last_write_end = 0;  // ticks (turnarounds)
+    bool last_was_write = false;  // the data ending at bus_free is a write's
+    uint64_t booked = 0;          // bursts booked so far (the scheduler window's clock)
+    DramBusGaps gaps;
+    DramWriteQueue writes;
+    explicit Channel(const DramConfig& c) : writes(c.write_queue, c.write_high, c.write_low) {}
   };
-  Location locate(uint64_t addr) const;
-  // The address map's constants.
-  struct AddressMap {
-    Divisor burst, interleave, channel, row, bank;
-    // In bursts: an interleave chunk, a row (access() works on burst numbers).
-    Divisor chunk_bursts, row_bursts;
-    bool multi_channel = false;  // chunks rotate over several channels
-    bool hash = false;           // DramConfig::bank_hash and more than one bank
-    bool pow2 = false;           // burst, chunk, channels, row and banks all powers of two
-    Location locate(uint64_t addr) const;
-  };
-  // Bank (hashed when `hash`, dram.bank_hash) and row of a channel's row line
-  // (its local address / row_bytes); the channel is the caller's.
-  template <bool Pow2>
-  static void bankRow(const Divisor& bank, bool hash, uint64_t row_line, unsigned& bank_out, uint64_t& row_out);
+
   // access() after its checks and byte counts; Pow2 = map_.pow2.
   template <bool Pow2>
-  Cycle book(Cycle now, uint64_t addr, uint32_t bytes);
-  // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
-  // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /
-  // channels (staggered). Start of the latest window at or before t (0: none);
-  // end of the first window meeting [from, end) (0: none).
-  uint64_t lastRefreshStart(unsigned ch, uint64_t t) const {
-    const uint64_t off = refresh_off_[ch];
-    if (t < off + refresh_period_) return 0;
-    return off + (t - off) / refresh_period_ * refresh_period_;
-  }
-  uint64_t refreshOverlapEnd(unsigned ch, uint64_t from, uint64_t end) const {
-    const uint64_t off = refresh_off_[ch];
-    uint64_t w = off + std::max<uint64_t>(1, from > off ? (from - off) / refresh_period_ : 0) * refresh_period_;
-    if (w + refresh_rfc_ <= from) w += refresh_period_;
-    return w < end ? w + refresh_rfc_ : 0;
-  }
+  Cycle book(Cycle now, uint64_t addr, uint32_t bytes, bool write);
+  // Books a run (n bursts on channel ch, bank, row; no command before
+  // `earliest`, the request's arrival) on the bus and returns the end of its
+  // data (ticks). A read may take a gap the bus left idle (DramBusGaps).
+  template <bool Write>
+  uint64_t bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest);
+  // Queues a write run arriving at `arrive`; returns the tick it is accepted.
+  uint64_t postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive);
+  // Books channel ch's next batch of writes from `at` (`all`: every waiting one).
+  void drainBatch(unsigned ch, uint64_t at, bool all);
   // Adds `n` bursts starting on the bus at ticks xfer, xfer + step, ... to
   // bus_bytes_per_interval (bucket of each burst's start cycle).
   void sampleBursts(uint64_t xfer, uint64_t n, uint64_t step);
 
-  DramConfig cfg_;
-  double core_mhz_ = 0;
-  uint64_t ctrl_ticks_ = 0, cl_ticks_ = 0, trcd_ticks_ = 0, trp_ticks_ = 0, tras_ticks_ = 0, burst_ticks_ = 0;
-  uint64_t act_step_ticks_ = 0;  // closed row: max(tRCD + CL + burst, tRAS) + tRP
-  uint64_t refresh_period_ = 0, refresh_rfc_ = 0;  // ticks; period 0: no refresh
-  std::vector<uint64_t> refresh_off_;              // ticks, per channel
-  AddressMap map_;
-  std::vector<uint64_t> bus_free_;    // ticks, per channel
-  std::vector<uint64_t> busy_ticks_;  // ticks, per channel
-  std::vector<Bank> banks_;           // channel-major: channel * banks + bank
+  DramConfig cfg_;  // first: checked before the map and the timings are built from it
+  DramAddressMap map_;
+  DramTimings t_;
+  std::vector<Channel> channels_;
+  std::vector<Bank> banks_;  // channel-major: channel * banks + bank
+  uint64_t hits_ = 0, misses_ = 0;  // row hits and misses of the runs booked (added to stats_)
+  uint64_t window_ = 0;  // DramBusGaps::Asker::window: queue_depth with FR-FCFS, 0 with FCFS
   MemoryStats stats_;
+  DramProbe probe_;
+  std::vector<uint64_t> busy_blocks_;  // bus ticks booked per 2^kBusyBlockShift cycles, all channels
+  void addBusy(uint64_t from_tick, uint64_t len);
 };
 
 }  // namespace oit::rop

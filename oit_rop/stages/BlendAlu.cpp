@@ -5,8 +5,8 @@
 
 namespace oit::rop {
 
-BlendAlu::BlendAlu(const AluConfig& cfg, double format_rate, unsigned rows_max)
-    : cfg_(cfg), rate_(double(cfg.blends_per_clock) * format_rate), done_(rows_max + 1), rows_max_(rows_max) {
+BlendAlu::BlendAlu(const AluConfig& cfg, double format_rate)
+    : cfg_(cfg), rate_(double(cfg.blends_per_clock) * format_rate) {
   if (cfg.blends_per_clock == 0) throw std::invalid_argument("alu.blends_per_clock must be > 0");
 }
 

@@ -1,13 +1,18 @@
 // BlendAlu: the blending-array read-modify-write unit. Throughput is
 // alu.blends_per_clock scaled by the row format (rgba8t8z32: 1, fp16:
-// fp16_rate, fp32: fp32_rate); latency is base_latency + row_latency x rows
-// touched, where rows comes from the functional InsertOutcome (rowsFor()).
-// Latencies take few distinct values, so completions sit in one in-order FIFO
-// per row count (no priority queue).
+// fp16_rate, fp32: fp32_rate); an insert's latency is what its insert did
+// (model::InsertWork, reported by the functional insert and carried with the
+// fragment): base_latency + cycles_per_compare x rows compared +
+// cycles_per_row_moved x rows written (ALGORITHMS.md, "Work per insert").
+// An insert may also start late (the A-buffer's node-counter atomic), so
+// completions sit in a heap ordered by (cycle, issue order).
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
+#include <deque>
+#include <queue>
 #include <utility>
 #include <vector>
 
@@ -18,84 +23,85 @@
 namespace oit::rop {
 
 struct AluStats {
-  uint64_t blends = 0, rows = 0, dropped = 0;
+  uint64_t blends = 0, compares = 0, moves = 0, dropped = 0;
 };
 
 class BlendAlu {
  public:
-  // rows_max: the largest rows value issue() will get.
-  BlendAlu(const AluConfig& cfg, double format_rate, unsigned rows_max);
+  BlendAlu(const AluConfig& cfg, double format_rate);
 
-  // Rows read-modify-written by one insert with `outcome`: Stored writes one
-  // row, Merged rewrites the whole array (merge / eviction), Discarded only
-  // compares. Without lazy merging (skip.lazy_merge = false) every kept
-  // fragment pays the merge. `array_rows` = the layout's rows (>= 1 used).
-  static unsigned rowsFor(model::InsertOutcome outcome, unsigned array_rows, bool lazy_merge) {
-    const unsigned merge = std::max(1u, array_rows);
-    switch (outcome) {
-      case model::InsertOutcome::Stored: return lazy_merge ? 1u : merge;
-      case model::InsertOutcome::Merged: return merge;
-      case model::InsertOutcome::Discarded: return 0u;
-    }
-    return 0u;
+  // Without lazy merging (skip.lazy_merge = false) every kept fragment pays
+  // the merge as if the array were full: at least `array_rows` rows moved.
+  static model::InsertWork chargedWork(model::InsertWork w, model::InsertOutcome o, unsigned array_rows,
+                                       bool lazy_merge) {
+    if (!lazy_merge && o == model::InsertOutcome::Stored)
+      w.moves = uint8_t(std::max<unsigned>(w.moves, std::min(255u, std::max(1u, array_rows))));
+    return w;
   }
   static double formatRate(const AluConfig& cfg, const model::StateLayout& layout);
 
-  unsigned latency(unsigned rows) const { return cfg_.base_latency + cfg_.row_latency * rows; }
+  unsigned latency(model::InsertWork w) const {
+    return cfg_.base_latency + cfg_.cycles_per_compare * w.compares + cfg_.cycles_per_row_moved * w.moves;
+  }
   unsigned slots(Cycle now) { return rate_.available(now); }
   Cycle nextSlot(Cycle now) const { return rate_.nextAvailable(now); }
-  // Starts one blend (or a drop of a late-culled fragment: rows = 0).
-  void issue(Cycle now, uint32_t token, unsigned rows, bool drop = false) {  // inline: once per fragment
+  // Starts one blend (or a drop of a late-culled fragment: no work) at `now`;
+  // its work begins at `start` >= now (later when it waited for an atomic).
+  void issue(Cycle now, uint32_t token, model::InsertWork w, bool drop = false, Cycle start = 0) {  // inline: once per fragment
     rate_.take();
-    rows = std::min(rows, rows_max_);
-    const Cycle done = now + latency(rows);
-    done_[rows].push({done, token});
+    if (drop) w = {0, 0};
+    const Cycle done = std::max(now, start) + latency(w);
+    done_.push({done, order_++, token});
+    if (start > now) starts_.push_back(start);  // nondecreasing: NodeCounter grants come in order
     next_done_ = std::min(next_done_, done);
-    ++in_flight_;
     // Counted by selects: drops are random per fragment.
     stats_.dropped += drop;
     stats_.blends += !drop;
-    stats_.rows += drop ? 0u : rows;
+    stats_.compares += w.compares;
+    stats_.moves += w.moves;
   }
-  // The approximate engine's visits: n blends (or drops) counted like n
-  // issue()s, without the completion queue (the engine tallies its visits by
-  // kind and counts them after the phase).
-  void countMany(unsigned rows, bool drop, uint64_t n) {
-    rows = std::min(rows, rows_max_);
-    stats_.dropped += drop ? n : 0;
-    stats_.blends += drop ? 0 : n;
-    stats_.rows += drop ? 0 : n * rows;
+  // The approximate engine's visits: one blend (or drop) counted like issue(),
+  // without the completion queue.
+  void count(model::InsertWork w, bool drop) {
+    if (drop) w = {0, 0};
+    stats_.dropped += drop;
+    stats_.blends += !drop;
+    stats_.compares += w.compares;
+    stats_.moves += w.moves;
   }
-  // A blend's latency as issue() schedules it, rows capped at rows_max.
-  unsigned latencyOf(unsigned rows) const { return latency(std::min(rows, rows_max_)); }
-  // Calls f(token) for each blend finishing at `now`.
+  // Calls f(token) for each blend finishing at or before `now`, in finishing order.
   template <class F>
   void complete(Cycle now, F&& f) {
     if (now < next_done_) return;  // nothing due (the common cycle; kNever: none in flight)
-    next_done_ = kNever;
-    for (auto& q : done_) {
-      while (!q.empty() && q.front().first <= now) {
-        const uint32_t t = q.front().second;
-        q.pop();
-        --in_flight_;
-        f(t);
-      }
-      if (!q.empty()) next_done_ = std::min(next_done_, q.front().first);
+    while (!done_.empty() && done_.top().done <= now) {
+      const uint32_t t = done_.top().token;
+      done_.pop();
+      f(t);
     }
+    next_done_ = done_.empty() ? kNever : done_.top().done;
   }
   Cycle nextCompletion() const { return next_done_; }
-  size_t inFlight() const { return in_flight_; }
+  // Every blend in flight still waits for its start (the node counter's atomic).
+  bool allWaitingAt(Cycle now) {
+    while (!starts_.empty() && starts_.front() <= now) starts_.pop_front();
+    return !done_.empty() && starts_.size() == done_.size();
+  }
+  size_t inFlight() const { return done_.size(); }
   const AluStats& stats() const { return stats_; }
 
  private:
+  struct Done {
+    Cycle done;
+    uint64_t order;  // issue order breaks ties: equal cycles complete as issued
+    uint32_t token;
+    bool operator>(const Done& o) const { return done != o.done ? done > o.done : order > o.order; }
+  };
   AluConfig cfg_;
   RateLimiter rate_;
-  std::vector<Fifo<std::pair<Cycle, uint32_t>>> done_;  // index: rows
-  unsigned rows_max_;  // done_.size() - 1 (kept: size() divides by sizeof(Fifo))
-  size_t in_flight_ = 0;
-  // Earliest completion in flight, kNever when none: each FIFO holds one
-  // latency, so its front is its earliest and the minimum over the fronts is exact.
-  Cycle next_done_ = kNever;
+  std::priority_queue<Done, std::vector<Done>, std::greater<Done>> done_;
+  uint64_t order_ = 0;
+  std::deque<Cycle> starts_;  // starts still ahead of the blends that waited
+  Cycle next_done_ = kNever;  // earliest completion in flight, kNever when none
   AluStats stats_;
 };
 

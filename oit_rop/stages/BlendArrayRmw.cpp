@@ -40,6 +40,7 @@ model::InsertOutcome BlendArrayRmw::enter(uint32_t token, unsigned pass, uint32_
   } else {
     o = insert_(*px_.algo, array, f, pass, ctx);
   }
+  last_work_ = ctx.work;
   ++outcomes_.at(pass)[size_t(o)];
   if (px_.tile_nodes && o == model::InsertOutcome::Stored) ++px_.tile_nodes[tile];
   return o;

@@ -40,6 +40,8 @@ class BlendArrayRmw {
   // It enters the critical section in pass `pass`: the insert (unordered) or
   // the read and the insert into its copy (none). Returns the outcome.
   model::InsertOutcome enter(uint32_t token, unsigned pass, uint32_t tile);
+  // The work of the last enter()'s insert (the BlendAlu's latency).
+  model::InsertWork lastWork() const { return last_work_; }
   // Its blend ended (none: the write lands; unordered: nothing to do).
   void complete(uint32_t token) {
     if (unlocked_) land(token);
@@ -63,7 +65,8 @@ class BlendArrayRmw {
   std::vector<uint8_t> writes_;
   uint32_t* updates_;  // px_.updates
   std::vector<std::array<uint64_t, model::kOutcomeCount>> outcomes_;
-  int64_t lost_ = 0;  // a write may restore updates an earlier race lost (the sum is >= 0)
+  int64_t lost_ = 0;
+  model::InsertWork last_work_;  // a write may restore updates an earlier race lost (the sum is >= 0)
 };
 
 }  // namespace oit::rop

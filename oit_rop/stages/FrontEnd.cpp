@@ -18,12 +18,25 @@ FrameGeometry::FrameGeometry(uint32_t w, uint32_t h, const PartitionConfig& p, L
     : width(w), height(h), tile_w(p.tile_width), tile_h(p.tile_height), partitions(p.count) {
   if (tile_w == 0 || tile_h == 0) throw std::invalid_argument("partitions.tile_width/tile_height must be > 0");
   if (partitions == 0 || partitions > 255) throw std::invalid_argument("partitions.count must be in [1, 255]");
+  const uint32_t tile_px = tile_w * tile_h;
+  if ((tile_px & (tile_px - 1)) != 0)
+    throw std::invalid_argument("partitions.tile_width/tile_height must be powers of two");
+  tile_shift = 0;
+  while ((1u << tile_shift) != tile_px) ++tile_shift;
   tiles_x = (w + tile_w - 1) / tile_w;
   tiles_y = (h + tile_h - 1) / tile_h;
   tile_col.resize(w);
   tile_row.resize(h);
-  for (uint32_t x = 0; x < w; ++x) tile_col[x] = x / tile_w;
-  for (uint32_t y = 0; y < h; ++y) tile_row[y] = (y / tile_h) * tiles_x;
+  pix_col.resize(w);
+  pix_row.resize(h);
+  for (uint32_t x = 0; x < w; ++x) {
+    tile_col[x] = x / tile_w;
+    pix_col[x] = tile_col[x] * tile_px + x % tile_w;
+  }
+  for (uint32_t y = 0; y < h; ++y) {
+    tile_row[y] = (y / tile_h) * tiles_x;
+    pix_row[y] = tile_row[y] * tile_px + (y % tile_h) * tile_w;
+  }
   owner.resize(size_t(tiles_x) * tiles_y);
   local.resize(owner.size());
   const uint32_t per_row = (tiles_x + partitions - 1) / partitions;  // a partition's tiles in one row, at most
@@ -146,6 +159,8 @@ void FrontEnd::route(std::span<const Fragment> batch) {
   const uint32_t width = geo_.width;
   const uint32_t* const tile_row = geo_.tile_row.data();
   const uint32_t* const tile_col = geo_.tile_col.data();
+  const uint32_t* const pix_row = geo_.pix_row.data();
+  const uint32_t* const pix_col = geo_.pix_col.data();
   const uint8_t* const owner = geo_.owner.data();
   const uint32_t* const local = geo_.local.data();
   const uint32_t* const lock_row = geo_.lock_row.data();
@@ -216,7 +231,8 @@ void FrontEnd::route(std::span<const Fragment> batch) {
       run_prim = f.prim;
       run_start = seq;
     }
-    InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], tile, seq, 0, 0, uint16_t(seq - run_start)};
+    InRec r{local[tile] * lock_per_tile + lock_row[f.y] + lock_col[f.x], pix_row[f.y] + pix_col[f.x], seq, 0, 0,
+            uint16_t(seq - run_start), {0, 0}};
     if (Hierarchical ? !(f.z < hiz_min[tile] || f.z >= hiz_max[tile]) : true) r.flags |= InRec::kNeedsDepthRead;
     if (f.z >= oz) {  // at or behind the opaque surface: culled
       r.flags |= InRec::kCulled;
@@ -237,6 +253,7 @@ void FrontEnd::route(std::span<const Fragment> batch) {
       ctx.opaque_z = oz;
       const model::InsertOutcome o = insert(algo, state + size_t(pixel) * words, f, pass, ctx);
       r.outcome = uint8_t(o);
+      r.work = ctx.work;
       ++outcomes[size_t(o)];
       if constexpr (First) {
         ++run.fragments;
@@ -273,7 +290,7 @@ void FrontEnd::refill() {
   pending_ = pending_.subspan(batch.size());
   if (batch.empty()) {
     // End of pass: every partition drains before its next pass (or resolve).
-    for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0});
+    for (auto& q : queues_) q.push(InRec{0, 0, 0, InRec::kPassEnd, 0, 0, {0, 0}});
     if (pass_ == 0) counts_.fragments_in = index_;
     if (progress_) progress_(double(pass_ + 1) / passes_, std::string(algo_.passName(pass_)));
     if (++pass_ < passes_) {

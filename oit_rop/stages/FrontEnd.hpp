@@ -30,13 +30,19 @@
 
 namespace oit::rop {
 
-// Screen tiles (tile_w x tile_h = one blending-array cache line) and their
-// owners: tile (tx, ty) belongs to partition (tx + ty) % partitions, a
-// checkerboard-like interleave that spreads neighbouring tiles.
+// Screen tiles (tile_w x tile_h pixels: the partition interleave, HiZ, tile
+// locks, fast clear and the resolve) and their owners: tile (tx, ty) belongs
+// to partition (tx + ty) % partitions, a checkerboard-like interleave that
+// spreads neighbouring tiles.
 struct FrameGeometry {
   uint32_t width = 0, height = 0, tile_w = 8, tile_h = 8, tiles_x = 0, tiles_y = 0, partitions = 1;
+  uint32_t tile_shift = 6;          // log2(tile_w x tile_h) (tile sizes are powers of two)
   std::vector<uint32_t> tile_col;   // x -> tile column
   std::vector<uint32_t> tile_row;   // y -> tile row * tiles_x
+  // A pixel's number in tile order: tile x tile pixels + its offset in the
+  // tile (row-major inside the tile) = pix_row[y] + pix_col[x]; tile =
+  // number >> tile_shift (the cache's line tables and the array layout use both).
+  std::vector<uint32_t> pix_row, pix_col;
   std::vector<uint8_t> owner;       // tile -> partition
   // tile -> its number among its partition's tiles, ty * ceil(tiles_x / N) + tx / N:
   // what a partition's cache sets and depth-tile buffer are indexed by (the
@@ -55,6 +61,7 @@ struct FrameGeometry {
   uint32_t tiles() const { return tiles_x * tiles_y; }
   uint32_t tilePixels() const { return tile_w * tile_h; }
   uint32_t tileOf(uint32_t x, uint32_t y) const { return tile_row[y] + tile_col[x]; }
+  uint32_t tiledPixel(uint32_t x, uint32_t y) const { return pix_row[y] + pix_col[x]; }
   uint32_t partitionOf(uint32_t tile) const { return owner[tile]; }
   uint32_t localOf(uint32_t tile) const { return local[tile]; }
   uint32_t lockAddress(uint32_t x, uint32_t y) const {
@@ -62,14 +69,14 @@ struct FrameGeometry {
   }
 };
 
-// One routed fragment (16 bytes; culled and inserted fragments alike).
+// One routed fragment (20 bytes; culled and inserted fragments alike).
 struct InRec {
   // kDeferredInsert: not inserted yet (lock.mode unordered / none, not culled):
   // its outcome is decided when it enters the lock, its Fragment travels in the
   // partition's deferred() queue.
   enum Flags : uint8_t { kCulled = 1, kNeedsDepthRead = 2, kPassEnd = 4, kDeferredInsert = 8 };
   uint32_t lock;    // lock address in its partition (FrameGeometry::lockAddress)
-  uint32_t tile;
+  uint32_t pixel;   // in tile order (FrameGeometry::tiledPixel): tile = pixel >> tile_shift
   uint32_t seq;     // index in the trace (shader latency hash)
   uint8_t flags;
   // model::InsertOutcome (0 while kDeferredInsert); kCulledKind for a culled fragment (no insert), so
@@ -79,6 +86,9 @@ struct InRec {
   static constexpr uint8_t kCulledKind = 4;
   // seq - first seq of its primitive's run (restarts every 65536 records; 0 when the lock does not group)
   uint16_t prim_offset;
+  // What its insert did (rows compared and written: the BlendAlu's latency);
+  // {0, 0} while kDeferredInsert and for a culled fragment.
+  model::InsertWork work;
 };
 
 struct DrawCounts {

@@ -23,8 +23,12 @@ def _phase_rank(name):
     if name == "resolve":
         return (2, 0)
     return (1, int(name.rsplit(" ", 1)[1]) if name[-1].isdigit() else 0)
+# timing.root_cause_cycles keys, from the input to the memory (oit_rop/RootCause.hpp).
+ROOT_CAUSES = ["input", "input_starvation", "scoreboard_full", "lock_wait", "alu", "rop_cache_miss", "l2",
+               "dram_latency", "dram_bandwidth", "pipeline_latency", "atomic_wait", "list_walk", "sort"]
 CAUSE_SHORT = {"lock_wait": "lock", "scoreboard_full": "scoreboard", "cache_miss_wait": "miss",
-               "dram_bandwidth": "DRAM", "alu_busy": "ALU", "input_starved": "starved"}
+               "dram_bandwidth": "DRAM", "alu_busy": "ALU", "input_starved": "starved",
+               "atomic_wait": "atomics", "list_walk": "list walk", "sort": "sort"}
 
 
 def _order(points, configs):
@@ -130,7 +134,10 @@ def cause_figure(points, scene, configs):
         pts = _order([p for p in points if configs.label(p) == conf], configs)
         names = [data.algo_label(p) for p in pts]
         if root:
-            causes = sorted({c for p in pts for c in data.prefixed(p["metrics"], "timing.root_cause_cycles.")})
+            # The causes some point of this machine has, in the pipeline's order
+            # (ROOT_CAUSES), any cause the list does not know after them.
+            seen = {c for p in pts for c, v in data.prefixed(p["metrics"], "timing.root_cause_cycles.").items() if v}
+            causes = [c for c in ROOT_CAUSES if c in seen] + sorted(seen - set(ROOT_CAUSES)) or ROOT_CAUSES[:1]
             total = [data.num(p["metrics"], "timing.partition_cycles") or 1.0 for p in pts]
             grid = np.array([[data.prefixed(p["metrics"], "timing.root_cause_cycles.").get(c, 0.0) / t
                               for c in causes] for p, t in zip(pts, total)])
@@ -209,11 +216,18 @@ def lock_figure(points, scene, configs):
     """Lock waiters and scoreboard occupancy over time for the point of each
     configuration with the most lock-wait cycles."""
     confs = [c for c in configs.all_labels(points) if c != configs.FUNCTIONAL]
-    fig, axes = plt.subplots(1, len(confs), figsize=(15, 4.0), squeeze=False)
-    for ax, conf in zip(axes[0], confs):
+    worst_of = {}
+    for conf in confs:
         pts = [p for p in points if configs.label(p) == conf]
         worst = max(pts, key=lambda p: data.num(p["metrics"], "lock.wait_cycles") or 0)
-        series = load_timeseries(worst)
+        worst_of[conf] = (worst, load_timeseries(worst))
+    if all(len(series) < 3 for _, series in worst_of.values()):
+        # No machine has a series to draw: a note, not a figure of empty panels.
+        return (f"<p class='note'>{esc(scene)}: the lock over time is not drawn: every machine's frame is "
+                f"shorter than three time-series intervals (stats.interval_cycles).</p>")
+    fig, axes = plt.subplots(1, len(confs), figsize=(15, 4.0), squeeze=False)
+    for ax, conf in zip(axes[0], confs):
+        worst, series = worst_of[conf]
         mhz = data.num(worst["metrics"], "timing.clock_mhz") or 1.0
         if len(series) < 3:
             empty_panel(ax, f"{conf}: {data.algo_label(worst)}: the frame is shorter than three time-series\n"

@@ -14,7 +14,8 @@ SIM_PREFIXES = ("config.rop.sim.", "config.rop.stats.")
 SIM_KEYS = ("config.rop.skip.idle_cycles",)
 
 STAGES = ["shader_input", "early_depth", "pixel_lock", "cache", "blend_alu", "resolve"]
-STALL_CAUSES = ["lock_wait", "scoreboard_full", "cache_miss_wait", "dram_bandwidth", "alu_busy", "input_starved"]
+STALL_CAUSES = ["lock_wait", "scoreboard_full", "cache_miss_wait", "dram_bandwidth", "alu_busy", "input_starved",
+                "atomic_wait", "list_walk", "sort"]
 MIB = 1024.0 * 1024.0
 
 

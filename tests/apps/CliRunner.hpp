@@ -98,8 +98,8 @@ inline std::vector<std::string> csvSplit(const std::string& line) {
 }
 
 // Compares two sweep results.csv tables (as lines) cell by cell, except the
-// columns that differ by nature: wall clock, and the paths and command line
-// that name the output folder. Returns the number of cells compared (0 after
+// columns that differ by nature: wall clock, measured memory, and the paths
+// and command line that name the output folder. Returns the number of cells compared (0 after
 // a failed assertion on the table's shape).
 inline size_t compareSweepTables(const std::vector<std::string>& a, const std::vector<std::string>& b) {
   size_t compared = 0;
@@ -115,7 +115,7 @@ inline size_t compareSweepTables(const std::vector<std::string>& a, const std::v
       for (size_t c = 0; c < header.size(); ++c) {
         const std::string& h = header[c];
         if (h.find("wall_seconds") != std::string::npos || h.find("per_second") != std::string::npos ||
-            h == "trace.path" || h == "oitsim.command")
+            h.rfind("sim.memory.", 0) == 0 || h == "trace.path" || h == "oitsim.command")
           continue;
         EXPECT_EQ(ra[c], rb[c]) << "row " << i << " column " << h;
         ++compared;
@@ -140,6 +140,26 @@ class TempDir {
 
  private:
   std::filesystem::path path_;
+};
+
+// A test suite sharing one generated trace, made once per suite: Tag names
+// the suite's folder (kFolder), the trace's file name (kFile) and the
+// `oitsim gen` arguments (kGen, without -o).
+template <class Tag>
+class GeneratedTraceSuite : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir(Tag::kFolder);
+    trace_ = dir_->file(Tag::kFile);
+    CliResult r = runOitsim(std::string(Tag::kGen) + " -o " + trace_);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static inline TempDir* dir_ = nullptr;
+  static inline std::string trace_;
 };
 
 }  // namespace oit::test

@@ -135,6 +135,12 @@ TEST_F(CliRunErrors, FunctionalModeRejectsTheSameBadTimingOptions) {
                           ": a VCD needs the timing model; drop --mode functional (the default is timing)\n");
   EXPECT_FALSE(fs::exists(out));
   EXPECT_FALSE(fs::exists(dir_->file("v.vcd")));
+  // An earlier run's VCD at the path goes too, as its other outputs do, even
+  // though this run fails on an option.
+  writeText(dir_->file("old.vcd"), "$date earlier run $end\n");
+  r = runOitsim("run --mode functional -q -t " + trace_ + " -o " + out + " --vcd " + dir_->file("old"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_->file("old.vcd")));
 }
 
 // An earlier run's report.json never survives a run that fails, however early
@@ -207,9 +213,9 @@ TEST_F(CliRunErrors, ConfigFilePresetSelectsThePresetWithoutPresetOption) {
   CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --config " + cfg);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = readJson(out + "/report.json");
-  EXPECT_EQ(j["config"]["rop"]["preset"], "dgpu");
+  EXPECT_EQ(j["config"]["rop"]["preset"], "titan-x-maxwell");  // dgpu is its alias
   EXPECT_EQ(j["config"]["rop"]["lock"]["capacity"], 64);
-  EXPECT_EQ(j["config"]["rop"]["clock"]["core_mhz"], 1216.0);
+  EXPECT_EQ(j["config"]["rop"]["clock"]["core_mhz"], 1075.0);
   CliResult c = runOitsim("run -q -t " + trace_ + " -o " + dir_->file("cfg_clash") + " --config " + cfg +
                           " --preset igpu");
   EXPECT_EQ(c.exit_code, 1) << c.output;
@@ -222,7 +228,9 @@ TEST_F(CliRunErrors, PeakBandwidthIsNeverBelowMean) {
   for (const std::string algo : {"mlab", "abuffer", "alpha"}) {
     SCOPED_TRACE(algo);
     const std::string out = dir_->file("bw_" + algo);
-    CliResult r = runOitsim("run -q -t " + trace_ + " --algo " + algo + " -o " + out);
+    // (DRAM only: with the preset's LLC this small frame moves nothing to DRAM.)
+    CliResult r = runOitsim("run -q -t " + trace_ + " --algo " + algo + " -o " + out +
+                            " --set l3.size_bytes=0 --set l2.size_bytes=0");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json m = readJson(out + "/report.json")["memory"];
     const double peak = m["peak_gbps"], mean = m["mean_gbps"], channels = m["channel_peak_gbps"];
@@ -234,7 +242,7 @@ TEST_F(CliRunErrors, PeakBandwidthIsNeverBelowMean) {
 
 TEST_F(CliRunErrors, VcdAtTheDefaultClockHasNoSystemcWarnings) {
   const std::string out = dir_->file("vcd_ok"), vcd = dir_->file("v.vcd");
-  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --vcd " + vcd);
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --vcd " + vcd + " --set stats.interval_cycles=1000");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, "");  // no (W713) "not representable in VCD time units", no (I703)
   const std::string text = readText(vcd);
@@ -352,18 +360,43 @@ TEST_F(CliRunErrors, AlgorithmAndLayersAreCheckedBeforeTheTrace) {
   EXPECT_EQ(r.output.find("cannot open"), std::string::npos) << r.output;
 }
 
-// A tile cache that cannot hold one line (8x8 pixels x k = 64 fp32 rows of
-// 20 B = 81 920 B > 64 KiB) is refused before any work, naming the option.
-TEST_F(CliRunErrors, CacheSmallerThanOneLineIsRefused) {
+// An insert gets all its cache lines or waits: a miss queue shorter than the
+// lines one insert touches (k = 64 fp32 rows of 20 B = 1280 B per pixel: 20
+// lines of 64 B) could never serve one, so it is refused before any work,
+// naming the option and the rule.
+TEST_F(CliRunErrors, MissQueueShorterThanOneInsertsLinesIsRefused) {
   const std::string out = dir_->file("bigk");
   CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " -a mlab -k 64 --format fp32");
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_EQ(r.output, "oitsim: error: cache.size_bytes (65536) is smaller than one line of 81920 bytes (one tile's "
-                      "blending arrays); enlarge cache.size_bytes, or shrink the tile (partitions.tile_width / "
-                      "tile_height) or the arrays\n");
+  EXPECT_EQ(r.output, "oitsim: error: cache.miss_queue (16) is smaller than the 20 cache lines one mlab insert "
+                      "touches (1280 bytes per pixel, memory.array_layout pixel_major, cache.line_bytes 64): an "
+                      "insert gets all its lines or waits, so it could never start; raise cache.miss_queue or "
+                      "cache.line_bytes\n");
   EXPECT_FALSE(fs::exists(out));
-  r = runOitsim("run -q -t " + trace_ + " -o " + out + " -a mlab -k 64 --format fp32 --set cache.size_bytes=163840");
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " -a mlab -k 64 --format fp32 --set cache.miss_queue=20");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+// The hierarchy's configuration rules are one line naming the parameter.
+TEST_F(CliRunErrors, BadHierarchyIsOneLineNamingTheParameter) {
+  const std::string out = dir_->file("badl2");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --set cache.sector_bytes=48");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): cache.sector_bytes (48) must be a "
+                      "power of two dividing cache.line_bytes (64)\n");
+  EXPECT_FALSE(fs::exists(out));
+  // The DRAM controller's rules too (the write queue's watermarks out of order).
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --set dram.write_low=60");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): dram.write_low (60) >= "
+                      "dram.write_high (56): the low watermark must be below the high one\n");
+  EXPECT_FALSE(fs::exists(out));
+  // An l2 line smaller than the ROP cache's, on another preset.
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --preset titan-x-maxwell --set l2.line_bytes=64");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset titan-x-maxwell): l2.line_bytes (64) is smaller "
+                      "than cache.line_bytes (128): a line of the level above must fit in one l2 line\n");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -89,19 +89,64 @@ TEST_F(CliRunFlip, BadPpdIsOneErrorAndWritesNothing) {
   }
 }
 
-// abuffer uses none of k, format, bits, samples, weight, seed: its summary
-// names none (it said "abuffer (k=4, format fp32)").
+// abuffer uses none of k, bits, samples, weight, seed; its nodes store their
+// colour in the format, so its summary names the format only (it said
+// "abuffer (k=4, format fp32)"). With a pool that holds every fragment and
+// fp32 nodes it is the exact reference (FLIP 0).
 TEST_F(CliRunFlip, SummaryShowsOnlyTheSettingsTheAlgorithmUses) {
-  CliResult r = runOitsim("run --mode functional --algo abuffer --layers 2 --trace " + trace_ + " --out " +
-                          dir_.file("abuffer"));
+  CliResult r = runOitsim("run --mode functional --algo abuffer --layers 2 --set abuffer.nodes_per_pixel=64 --trace " +
+                          trace_ + " --out " + dir_.file("abuffer"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("algorithm   abuffer, mode functional, 1 pass(es)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("algorithm   abuffer (format fp32), mode functional, 1 pass(es)"), std::string::npos)
+      << r.output;
   const nlohmann::json j = readJson(dir_.file("abuffer") + "/report.json");
-  EXPECT_EQ(j["config"]["ignored_settings"],
-            nlohmann::json({"layers", "format", "bits", "samples", "weight", "seed"}));
+  EXPECT_EQ(j["config"]["ignored_settings"], nlohmann::json({"layers", "bits", "samples", "weight", "seed"}));
+  EXPECT_EQ(j["fragments"]["dropped_pool_full"].get<uint64_t>(), 0u);
   EXPECT_EQ(j["image"]["metrics"]["flip"]["mean"].get<double>(), 0.0);
   r = runOitsim("run --mode functional --algo mlab --layers 2 --trace " + trace_ + " --out " + dir_.file("mlab"));
   EXPECT_NE(r.output.find("algorithm   mlab (k=2, format fp32), mode functional"), std::string::npos) << r.output;
+}
+
+// The A-buffer's preallocated pool: 96 x 54 pixels, 1 node per pixel = 5184
+// nodes; the fragments past them are dropped, counted and visible in the
+// image's error, in both modes alike.
+TEST_F(CliRunFlip, AbufferPoolOverflowIsCountedAndVisible) {
+  for (const char* mode : {"functional", "timing"}) {
+    const std::string out = dir_.file(std::string("pool-") + mode);
+    CliResult r = runOitsim(std::string("run -q --mode ") + mode +
+                            " --algo abuffer --set abuffer.nodes_per_pixel=1 --trace " + trace_ + " --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = readJson(out + "/report.json");
+    EXPECT_EQ(j["fragments"]["stored"].get<uint64_t>(), 96u * 54u) << mode;
+    EXPECT_EQ(j["fragments"]["dropped_pool_full"].get<uint64_t>(),
+              j["fragments"]["in"].get<uint64_t>() - j["fragments"]["opaque"].get<uint64_t>() -
+                  j["fragments"]["culled_by_depth"].get<uint64_t>() - 96u * 54u)
+        << mode;
+    EXPECT_GT(j["image"]["metrics"]["flip"]["mean"].get<double>(), 0.0) << mode;
+    EXPECT_EQ(j["config"]["abuffer"]["pool_nodes"].get<uint64_t>(), 96u * 54u) << mode;
+  }
+}
+
+// A pool too small for the heads, or a zero budget: one line naming the
+// parameter, exit 1, nothing written.
+TEST_F(CliRunFlip, BadAbufferBudgetsAreOneLineNamingTheParameter) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"abuffer.pool_bytes=1000", "abuffer.pool_bytes 1000 cannot hold the heads (20736 B for 96 x 54 pixels)"},
+      {"abuffer.nodes_per_pixel=0", "abuffer.nodes_per_pixel"},
+      {"abuffer.max_sorted=0", "abuffer.max_sorted"},
+      {"abuffer.atomics_per_clock=0", "abuffer.atomics_per_clock"},
+  };
+  for (const auto& [set, want] : cases) {
+    for (const char* mode : {"functional", "timing"}) {
+      const std::string out = dir_.file(std::string("bad-") + mode);
+      CliResult r = runOitsim(std::string("run -q --mode ") + mode + " --algo abuffer --set " + set + " --trace " +
+                              trace_ + " --out " + out);
+      EXPECT_EQ(r.exit_code, 1) << set << r.output;
+      EXPECT_EQ(lines(r.output).size(), 1u) << set << r.output;
+      EXPECT_NE(r.output.find(want), std::string::npos) << set << r.output;
+      EXPECT_FALSE(fs::exists(out + "/report.json")) << set;
+    }
+  }
 }
 
 }  // namespace

@@ -47,11 +47,14 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
       {"--seeds 4 --mode functional",
        "--seeds 4: flicker across shader-latency seeds needs the timing model; drop --mode functional (the "
        "default is timing)"},
+      {"--seeds 2 --reference none",
+       "--seeds 2: the flicker measures each seed's image against the reference; --reference none has none (give "
+       "--reference abuffer or FILE.pfm)"},
       {"--mode functional --set lock.mode=unordered",
        "lock.mode=unordered needs the timing model (its image follows the order the timing run lets fragments "
        "into the lock); --mode functional inserts in submission order, which is lock.mode=ordered"},
       {"--set sim.engine=approximate --set lock.mode=none",
-       "invalid configuration (preset igpu): lock.mode=none is not modelled by sim.engine=approximate (it visits "
+       "invalid configuration (preset iris-pro-5200): lock.mode=none is not modelled by sim.engine=approximate (it visits "
        "fragments in submission order, so it cannot apply inserts in lock-entry order or race them); use "
        "sim.engine=cycle or lock.mode=ordered"},
   };
@@ -65,8 +68,12 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
   // The parent keeps every seed's image: more seeds than memory holds are refused up front.
   CliResult r = runOitsim("run -q -t " + small_ + " -o " + out + " --seeds 4000000000");
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_EQ(r.output.rfind("oitsim: error: " + small_ + ": a 64 x 48 frame needs at least ", 0), 0u) << r.output;
-  EXPECT_NE(r.output.find("and 4000000000 seeds' images"), std::string::npos) << r.output;
+  // 4e9 x (12 B image + 3 B sRGB8 codes) x 3072 pixels: about 150,000 GiB.
+  EXPECT_EQ(r.output.rfind("oitsim: error: " + small_ + ": a 64 x 48 frame with mlab and 4000000000 seeds' images "
+                           "needs about ", 0),
+            0u)
+      << r.output;
+  EXPECT_NE(r.output.find("GiB at its peak (outputs), more than the memory budget of"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -92,7 +92,7 @@ void ReportBrowser::checkSections() {
   for (const char* s : {"<h2 id='hardware'>Hardware configurations</h2>", "<h3>Where the time goes</h3>",
                         "<h3>Cost against image error</h3>", "<h3>Against k and the other numeric axes</h3>",
                         "<h3>Memory (as the MLAB paper's Table 1)</h3>", "<h3>Images</h3>", "<h3>Depth complexity</h3>",
-                        "<h2 id='points'>All points</h2>", "Download this table as CSV", "largest stall (share of frame)",
+                        "<h2 id='points'>All points</h2>", "Download this table as CSV", "bound by (share of frame)",
                         "FLIP error per pixel"})
     EXPECT_NE(page.find(s), std::string::npos) << s;
   // No test artefact (it said "48 of 48 images decoded"), nothing from the network.

@@ -288,7 +288,7 @@ TEST(SweepErrors, EveryAxisValueIsCheckedBeforeAnythingRuns) {
       {R"("axes": {"format": ["fp8"]})",
        R"(s.json: axes.format[0]: expected a storage format (fp32, rgba8t8z32, fp16), got "fp8")"},
       {R"("axes": {"mode": ["fast"]})", R"(s.json: axes.mode[0]: expected functional or timing, got "fast")"},
-      {R"("axes": {"preset": ["tpu"]})", R"(s.json: axes.preset[0]: expected a ROP preset (igpu, dgpu), got "tpu")"},
+      {R"("axes": {"preset": ["tpu"]})", R"(s.json: axes.preset[0]: expected a ROP preset (iris-pro-5200, titan-x-maxwell, navi21; aliases igpu, dgpu), got "tpu")"},
       {R"("axes": {"lock.capacity": [0, 4]})", R"(s.json: axes.lock.capacity[0]: lock.capacity = 0: )"},
       {R"("axes": {"speed": [{"label": "a", "mode": "functional"}, {"label": "b", "set": {"lock.capacity": 0}}]})",
        R"(s.json: axes.speed[1].set.lock.capacity: lock.capacity = 0: )"},

@@ -81,7 +81,8 @@ TEST(AlgorithmSettings, UnknownAlgorithmIsAnErrorNamingTheValidOnes) {
               std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(ignoredSettings("abuffer"), (std::vector<std::string>{"layers", "format", "bits", "samples", "weight", "seed"}));
+  // The A-buffer under test stores its nodes' colour in the format (rgba8t8z32: the published 12-byte node).
+  EXPECT_EQ(ignoredSettings("abuffer"), (std::vector<std::string>{"layers", "bits", "samples", "weight", "seed"}));
   EXPECT_EQ(ignoredSettings("mlab"), (std::vector<std::string>{"bits", "samples", "weight", "seed"}));
 }
 

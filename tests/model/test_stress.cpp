@@ -97,8 +97,12 @@ TEST_P(StressCaseTest, EveryAlgorithmFiniteInRangeAndBalanced) {
     EXPECT_EQ(r.out_of_range, 0u) << who(r) << " left [0,1] (min " << r.min_value << ", max " << r.max_value
                                   << "): " << r.note;
     EXPECT_TRUE(r.balanced) << who(r) << ": " << r.note;
-    // The reference against itself, whatever format it was handed.
-    if (r.algorithm == "abuffer") {
+    // The reference against itself in fp32. In rgba8t8z32 / fp16 the nodes
+    // keep 8-bit / half colour and alpha (the 12- / 16-byte node), and deep
+    // stacks of small alphas lose to the rounding as a real 12-byte A-buffer
+    // does (merge_chain_fp16_4096 in rgba8t8z32: 0.295): range and finiteness
+    // are asserted above, not the error.
+    if (r.algorithm == "abuffer" && r.format == "fp32") {
       EXPECT_EQ(r.max_abs_error, 0.0) << who(r);
     }
   }

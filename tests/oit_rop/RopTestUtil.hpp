@@ -65,6 +65,20 @@ inline std::vector<Fragment> smallScene(uint32_t w, uint32_t h, unsigned max_dep
   return out;
 }
 
+// `layers` fragments per pixel over a w x h frame, layer by layer, raster
+// order within a layer, layer l nearer than the last (depth 1 - (l + 1) x
+// depth_step), one primitive each: a streaming scene.
+inline std::vector<Fragment> layerSweeps(uint32_t w, uint32_t h, unsigned layers, float depth_step) {
+  std::vector<Fragment> fs;
+  uint32_t prim = 0;
+  for (unsigned l = 0; l < layers; ++l)
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x)
+        fs.push_back(model::testutil::frag(uint16_t(x), uint16_t(y), 1.0f - float(l + 1) * depth_step, 0.5f, 0.25f,
+                                           0.125f, 0.25f, model::testutil::kTranspDraw, prim++));
+  return fs;
+}
+
 inline RopConfig smallConfig() {
   RopConfig c;
   c.stats.interval_cycles = 500;

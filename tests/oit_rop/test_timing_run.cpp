@@ -185,8 +185,10 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
   };
   // (rate 0.02: early depth's leave is rate-limited past a head's depth read, so
   // the head's status turns from depth wait to busy before it can leave.)
-  for (const auto& [parts, miss_queue, rate] : {std::tuple{1u, 16u, 0.5}, std::tuple{1u, 1u, 0.5},
-                                                std::tuple{2u, 16u, 0.5}, std::tuple{2u, 1u, 0.5},
+  // (A two-entry miss queue is the smallest an fp32 mlab insert can use with
+  // 64-byte lines: an 80-byte array spans two lines.)
+  for (const auto& [parts, miss_queue, rate] : {std::tuple{1u, 16u, 0.5}, std::tuple{1u, 2u, 0.5},
+                                                std::tuple{2u, 16u, 0.5}, std::tuple{2u, 2u, 0.5},
                                                 std::tuple{2u, 16u, 0.02}}) {
     {
       SCOPED_TRACE(std::to_string(parts) + " partitions, miss queue " + std::to_string(miss_queue) + ", rate " +
@@ -203,7 +205,7 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
       EXPECT_EQ(withoutSkipCounts(a.stats), withoutSkipCounts(b.stats));
       EXPECT_GT(a.stats["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
       EXPECT_EQ(b.stats["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
-      if (miss_queue == 1) {
+      if (miss_queue == 2) {
         EXPECT_GT(a.stats["cache"]["miss_queue_full"].get<uint64_t>(), 0u);
         // One refusal per access that waited: never more than the misses.
         EXPECT_LE(a.stats["cache"]["miss_queue_full"].get<uint64_t>(), a.stats["cache"]["misses"].get<uint64_t>());
@@ -215,7 +217,10 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
 // The DRAM bank hash keeps the A-buffer's frame nearly independent of how
 // finely the partitions interleave (sim.quantum_cycles): its per-partition node
 // pools, regions 2^36 B apart, met in one bank on different rows with the plain
-// map, so lockstep partitions (quantum 1) reopened a row at every switch.
+// map, so lockstep partitions (quantum 1) reopened a row at every switch. The
+// DRAM controller's write queue has the same effect: it drains the node
+// writes in batches grouped by row, so with batching the plain map is as
+// insensitive; written one by one (dram.write_high = 1) it is not.
 TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
   // Particles: 300 transparent 16x16 quads at random places and depths over an
   // opaque backdrop (long node lists per tile, as gen's particles scene).
@@ -231,18 +236,26 @@ TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
     for (uint16_t y = y0; y < y0 + 16; ++y)
       for (uint16_t x = x0; x < x0 + 16; ++x) fs.push_back(model::testutil::frag(x, y, z, r, 0.5f, 0.5f, a));
   }
-  auto cycles = [&](uint64_t quantum, bool hash) {
+  auto cycles = [&](uint64_t quantum, bool hash, bool batched = true) {
     RopConfig cfg = smallConfig();
     cfg.sim.quantum_cycles = quantum;
     cfg.dram.bank_hash = hash;
+    if (!batched) {
+      cfg.dram.write_high = 1;
+      cfg.dram.write_low = 0;
+    }
     const auto r = runInChild([&] { return timed("abuffer", {}, fs, 128, 96, cfg); });
     EXPECT_TRUE(r.ok) << r.error;
     return r.ok ? r.stats["timing"]["cycles"].get<double>() : 0.0;
   };
   const double hashed_lockstep = cycles(1, true), hashed = cycles(200, true);
   const double plain_lockstep = cycles(1, false), plain = cycles(200, false);
+  const double one_by_one_lockstep = cycles(1, false, false), one_by_one = cycles(200, false, false);
   EXPECT_LT(std::abs(hashed - hashed_lockstep) / hashed_lockstep, 0.02);
-  EXPECT_GT(std::abs(plain - plain_lockstep) / plain_lockstep, 0.5);  // the effect the hash removes (3x here)
+  EXPECT_LT(std::abs(plain - plain_lockstep) / plain_lockstep, 0.02);
+  // The effect the hash and the batches remove (+45 % here; 3x before the
+  // resolve walked its lists and sorted, which the quantum does not change).
+  EXPECT_GT(std::abs(one_by_one - one_by_one_lockstep) / one_by_one_lockstep, 0.3);
 }
 
 // Per-draw totals (report.json per_draw) counted independently from the scene:
@@ -302,11 +315,16 @@ TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
 }
 
 // The resolve of a tile starts when its inputs are there: for the A-buffer the
-// tile's node lists (12 B per node, read once). One 8x8 tile with 40 layers
-// (2560 nodes = 30 720 B) behind a 0.5 GB/s channel: the read alone takes
-// 30 720 / (0.5 GB/s / 1150 MHz) = 70 656 cycles of bus, all of which the resolve
-// waits ("cache_miss_wait"); then it computes max(64 px, 2560 nodes) at
-// blends_per_clock x fp32_rate (its layout's rows are fp32) = 0.5 per clock.
+// tile's node lists, walked with dependent reads (each node of an fp32 pool
+// 24 B, read once, each its own 64 B burst at a scattered address). One 8x8
+// tile with 40 layers (2560 nodes) behind a 0.5 GB/s channel: the bursts alone
+// take 2560 x 64 / (0.5 GB/s / 1150 MHz) = 376 832 cycles of bus, all of which
+// the resolve waits ("cache_miss_wait"). Then each pixel sorts its 40 nodes:
+// submitted front to back, the list runs back to front, so node i moves past
+// all i sorted ones (i compares, i moves, reaching the front): 780 + 780 = 1560
+// cycles at 1 cycle each, the same for every pixel (they sort side by side);
+// then it composites max(64 px, 2560 nodes) at blends_per_clock x fp32_rate
+// (its layout's rows are fp32) = 0.5 per clock: 5120 cycles.
 TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
   std::vector<Fragment> fs;
   for (int l = 0; l < 40; ++l)
@@ -318,12 +336,39 @@ TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
   cfg.dram.channel_gbps = 0.5;
   const auto r = runInChild([&] { return timed("abuffer", {}, fs, 8, 8, cfg); });
   ASSERT_TRUE(r.ok) << r.error;
-  EXPECT_EQ(r.stats["memory"]["node_pool_bytes_read"].get<uint64_t>(), 2560u * 12u);
+  EXPECT_EQ(r.stats["memory"]["node_pool_bytes_read"].get<uint64_t>(), 2560u * 24u);
+  ASSERT_EQ(cfg.abuffer.sort_cycles_per_compare, 1u);
+  ASSERT_EQ(cfg.abuffer.sort_cycles_per_move, 1u);
+  ASSERT_EQ(cfg.dram.burst_bytes, 64u);
   const auto& resolve = r.stats["timing"]["stages"]["resolve"];
   const double bytes_per_cycle = 0.5e9 / (cfg.clock.core_mhz * 1e6);
-  EXPECT_GE(resolve["stalls"]["cache_miss_wait"].get<uint64_t>(), uint64_t(30720 / bytes_per_cycle));
+  EXPECT_GE(resolve["stalls"]["list_walk"].get<uint64_t>(), uint64_t(2560 * 64 / bytes_per_cycle));
+  EXPECT_EQ(resolve["stalls"]["sort"].get<uint64_t>(), 1560u);
   EXPECT_EQ(resolve["busy"].get<uint64_t>(), uint64_t(2560 / (cfg.alu.blends_per_clock * cfg.alu.fp32_rate)));
   expectBalanced(r.stats);
+}
+
+// The list walk is latency-bound: a pixel with n nodes costs n dependent
+// reads. One pixel of one 8x8 tile, n layers, a fast channel (no bandwidth
+// limit to speak of): each step waits one DRAM read's latency L (controller +
+// activate/CAS, roughly the same for every scattered node), so the resolve's
+// list_walk grows by L per node: walk(2n) - walk(n) = n L within a few cycles,
+// and L is at least the controller latency (40 ns = 46 cycles at 1150 MHz).
+TEST(TimingRun, AbufferListWalkCostsOneDependentReadPerNode) {
+  auto walk = [](int n) {
+    std::vector<Fragment> fs;
+    for (int l = 0; l < n; ++l) fs.push_back(model::testutil::frag(0, 0, 0.01f + 0.02f * l, 1, 0, 0, 0.5f));
+    RopConfig cfg = smallConfig();
+    cfg.partitions.count = 1;
+    const auto r = runInChild([&] { return timed("abuffer", {}, fs, 8, 8, cfg); });
+    EXPECT_TRUE(r.ok) << r.error;
+    return r.ok ? r.stats["timing"]["stages"]["resolve"]["stalls"]["list_walk"].get<double>() : 0.0;
+  };
+  const double w8 = walk(8), w16 = walk(16), w32 = walk(32);
+  const double per_node = (w32 - w16) / 16;
+  EXPECT_GE(per_node, 40.0 * 1.150);                      // at least the controller latency per node
+  EXPECT_NEAR(w16 - w8, 8 * per_node, 0.1 * 8 * per_node);  // linear in n: not a stream
+  EXPECT_GT(w8, 8 * 40.0 * 1.150);
 }
 
 // Stage accounts derived by hand. One partition, one transparent fragment per
@@ -334,13 +379,14 @@ TEST(TimingRun, AbufferResolveWaitsForItsNodeLists) {
 // c + 24 (latency 4), reaches the lock there and is admitted at once (distinct
 // pixels); the partition steps the lock before early depth, so it enters the
 // cache at c + 25, reaches the ALU at c + 25 + hit 10 = c + 35 and finishes at
-// c + 35 + base 8 + row 2 x 1 (Stored, lazy merge) = c + 45.
+// c + 35 + base 8 + 1 compare x 1 + 1 row written x 2 = c + 46 (mlab into an
+// empty array: the slot search stops at row 0, only the new row is written).
 // Issue: 2 per cycle in cycles 0 .. N/2 - 1.
 //  - shader_input busy while issuing or holding a fragment: cycles
 //    [0, N/2 - 1 + 20) = N/2 + 19 = 2067 (the last leaves at 2067).
 //  - blend_alu busy from the first issue to it (cycle 35) until the last
-//    completion (N/2 - 1 + 45): N/2 + 9 = 2057 cycles.
-//  - no scoreboard_full (at most ~2 x 45 = 90 of 256 entries in flight), no
+//    completion (N/2 - 1 + 46): N/2 + 10 = 2058 cycles.
+//  - no scoreboard_full (at most ~2 x 46 = 92 of 256 entries in flight), no
 //    lock_wait, no cache_miss_wait in the cache stage.
 // Exact: every rate, latency and order above is an integer of the model.
 // Both engines give these figures.
@@ -360,7 +406,8 @@ TEST_P(StageAccountsOn, AStreamOfDistinctPixelsMatchesTheHandDerivedCycles) {
   ASSERT_EQ(cfg.early_depth.latency, 4u);
   ASSERT_EQ(cfg.cache.hit_latency, 10u);
   ASSERT_EQ(cfg.alu.base_latency, 8u);
-  ASSERT_EQ(cfg.alu.row_latency, 2u);
+  ASSERT_EQ(cfg.alu.cycles_per_compare, 1u);
+  ASSERT_EQ(cfg.alu.cycles_per_row_moved, 2u);
   ASSERT_EQ(cfg.alu.blends_per_clock, 2u);
   model::AlgorithmParams p;
   p.format = model::StorageFormat::Rgba8T8Z32;  // full ALU rate: 2 blends/clock
@@ -372,11 +419,13 @@ TEST_P(StageAccountsOn, AStreamOfDistinctPixelsMatchesTheHandDerivedCycles) {
   EXPECT_EQ(st["shader_input"]["stalls"]["scoreboard_full"].get<uint64_t>(), 0u);
   EXPECT_EQ(st["pixel_lock"]["stalls"]["lock_wait"].get<uint64_t>(), 0u);
   EXPECT_EQ(st["cache"]["stalls"]["cache_miss_wait"].get<uint64_t>(), 0u);
-  EXPECT_EQ(st["blend_alu"]["busy"].get<uint64_t>(), N / 2 + 9);
-  // The transparent pass ends when the last fragment released (2047 + 45).
+  EXPECT_EQ(st["blend_alu"]["busy"].get<uint64_t>(), N / 2 + 10);
+  EXPECT_EQ(r.stats["alu"]["compares"].get<uint64_t>(), N);  // one compare and one row per insert
+  EXPECT_EQ(r.stats["alu"]["moves"].get<uint64_t>(), N);
+  // The transparent pass ends when the last fragment released (2047 + 46).
   const auto& part = r.stats["timing"]["per_partition"][0];
   EXPECT_EQ(part["opaque_end_cycle"].get<uint64_t>(), 0u);
-  EXPECT_EQ(part["pass_end_cycles"][0].get<uint64_t>(), N / 2 - 1 + 45);
+  EXPECT_EQ(part["pass_end_cycles"][0].get<uint64_t>(), N / 2 - 1 + 46);
   expectBalanced(r.stats);
 }
 
@@ -404,12 +453,13 @@ TEST(TimingRun, FastClearSkipsUntouchedTilesAndEarlyDepthCulls) {
   EXPECT_EQ(off.stats["skips"]["early_depth_culled"].get<uint64_t>(), 0u);
   EXPECT_EQ(off.stats["skips"]["late_culled"].get<uint64_t>(), 256u);
   EXPECT_TRUE(sameBits(on.image, off.image));
-  // Without fast clear every tile's arrays are written at frame start.
-  const uint64_t line = on.stats["cache"]["line_bytes"];
-  EXPECT_GE(off.stats["memory"]["dram_write_bytes"]["blend_arrays"].get<uint64_t>(), 64 * line);
-  // ... so the frame touched all 64 tiles' arrays (it counted only the 4 a blend wrote).
-  EXPECT_EQ(on.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 4 * line);
-  EXPECT_EQ(off.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 64 * line);
+  // Without fast clear every tile's arrays (64 px x 80 B: 5120 B, 80 lines) are written at frame start.
+  const uint64_t tile = on.stats["cache"]["tile_stride_bytes"];
+  ASSERT_EQ(tile, 5120u);
+  EXPECT_GE(off.stats["memory"]["dram_write_bytes"]["blend_arrays"].get<uint64_t>(), 64 * tile);
+  // ... so the frame touched all 64 tiles' arrays (it counted only the 4 a blend wrote: their 256 pixels' 80 B).
+  EXPECT_EQ(on.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 256u * 80);
+  EXPECT_EQ(off.stats["memory"]["footprint"]["touched"]["blend_arrays"].get<uint64_t>(), 64 * tile);
   EXPECT_EQ(on.stats["memory"]["dram_write_bytes"]["resolve"].get<uint64_t>(), 4u * 64 * 4);
 }
 
@@ -425,13 +475,17 @@ TEST(TimingRun, SecondRunInOneProcessIsRefused) {
 
 }  // namespace
 
-// A 128 KiB, 8-way cache "fits" a 64x64 frame only if a tile line is 2 KiB
-// (64 px x 32 B: mlab k=4 rgba8t8z32): then a raster-order pass misses each of
-// the 64 tiles once and the resolve hits. With fp32 rows (20 B) a line is
-// 5 KiB, only 24 lines (3 sets x 8 ways) fit: the pass still misses 64 times
-// (8 tiles live at a time), but the resolve, walking the 64 tiles in order
-// through 24 lines (LRU), misses all 64 again: 128 misses, from the line size,
-// not from the set index.
+// A 128 KiB, 8-way cache of 64-byte lines (2048 lines, 256 sets) holds a
+// 64x64 frame's arrays exactly with mlab k=4 rgba8t8z32 (64 tiles x 64 px x
+// 32 B = 2048 lines; set = (tile x 32 + line) mod 256: 8 lines per set). One
+// fragment per pixel in raster order: two pixels share a line, so each line
+// misses once (its first pixel) and hits once: 4096 accesses, 2048 misses;
+// the resolve reads the 2048 written lines and hits them all. With fp32 rows
+// (80 B per pixel) a tile is 80 lines (5120 lines in all) and a pixel's array
+// spans two lines: per row of 8 pixels of a tile, 16 line accesses to 10 lines
+// (10 misses, 6 hits): 8192 accesses, 5120 misses; the resolve then walks the
+// tiles in order through 2048 lines and misses all 5120 again (LRU: the first
+// tiles' lines left first).
 TEST(TimingRun, ExactlyFittingCacheMissesEachTileOnce) {
   std::vector<Fragment> fs;
   for (uint16_t y = 0; y < 64; ++y)
@@ -447,10 +501,11 @@ TEST(TimingRun, ExactlyFittingCacheMissesEachTileOnce) {
     const auto r = runInChild([&] { return timed("mlab", p, fs, 64, 64, cfg); });
     ASSERT_TRUE(r.ok) << r.error;
     const bool rgba8 = format == model::StorageFormat::Rgba8T8Z32;
-    EXPECT_EQ(r.stats["cache"]["line_bytes"].get<uint64_t>(), rgba8 ? 2048u : 5120u);
+    EXPECT_EQ(r.stats["cache"]["line_bytes"].get<uint64_t>(), 64u);
+    EXPECT_EQ(r.stats["cache"]["tile_stride_bytes"].get<uint64_t>(), rgba8 ? 2048u : 5120u);
     EXPECT_EQ(r.stats["skips"]["tiles_resolved"].get<uint64_t>(), 64u);
-    EXPECT_EQ(r.stats["cache"]["accesses"].get<uint64_t>(), 64u * 64 + 64);  // fragments + resolve
-    EXPECT_EQ(r.stats["cache"]["misses"].get<uint64_t>(), rgba8 ? 64u : 128u);
+    EXPECT_EQ(r.stats["cache"]["accesses"].get<uint64_t>(), rgba8 ? 4096u + 2048 : 8192u + 5120);  // fragments + resolve
+    EXPECT_EQ(r.stats["cache"]["misses"].get<uint64_t>(), rgba8 ? 2048u : 5120u + 5120);
   }
 }
 
@@ -467,8 +522,9 @@ TEST(TimingRun, CacheNeverHasMoreFillsInFlightThanLines) {
                                        0.1f, 0.4f, model::testutil::kTranspDraw, uint32_t(i)));
   RopConfig cfg = smallConfig();
   cfg.partitions.count = 1;
-  cfg.cache.size_bytes = 1024;  // 2 lines of 512 B (8x8 px x 8 B, k = 1)
+  cfg.cache.size_bytes = 1024;  // 2 lines of 512 B (8x8 px x 8 B, k = 1: a tile per line)
   cfg.cache.ways = 2;
+  cfg.cache.line_bytes = 512;
   cfg.input.latency_model = LatencyModel::Fixed;
   model::AlgorithmParams p;
   p.layers = 1;
@@ -510,10 +566,11 @@ TEST(TimingRun, CacheSetsAreIndexedByThePartitionsOwnTileNumbers) {
                                          model::testutil::kTranspDraw, prim++));
   RopConfig cfg = smallConfig();
   cfg.partitions.count = 2;
-  cfg.cache.size_bytes = 16 * 2048;  // 16 lines of 2 KiB (8x8 px x 4 rows x 8 B): 2 sets of 8 ways
+  cfg.cache.size_bytes = 16 * 1024;  // 16 lines of 1 KiB, a tile each (8x8 px x 2 rows x 8 B): 2 sets of 8 ways
   cfg.cache.ways = 8;
+  cfg.cache.line_bytes = 1024;
   model::AlgorithmParams p;
-  p.layers = 4;
+  p.layers = 2;
   p.format = model::StorageFormat::Rgba8T8Z32;
   const auto r = runInChild([&] { return timed("mlab", p, fs, 17 * 8, 8, cfg); });
   ASSERT_TRUE(r.ok) << r.error;

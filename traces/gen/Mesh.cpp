@@ -15,6 +15,8 @@
 
 #include <fmt/format.h>
 
+#include "traces/InputFile.hpp"
+
 namespace oit::gen {
 
 namespace {
@@ -23,14 +25,22 @@ namespace {
 // numbers them, so every error can say "file:line: ...".
 class LineReader {
  public:
+  // Longer lines are an error: memory stays bounded whatever the file holds.
+  static constexpr size_t kMaxLineBytes = size_t{1} << 20;
+
   explicit LineReader(const std::string& path) : path_(path) {
-    if (std::filesystem::is_directory(path))
-      throw std::runtime_error(fmt::format("cannot open mesh file '{}': it is a directory", path));
+    // A regular file only (a FIFO would block, a device never end), opened
+    // without blocking; zlib then reads it through the descriptor.
+    InputFile in = openInputFile(path);
+    if (!in && in.error)
+      throw std::runtime_error(fmt::format("cannot open mesh file '{}': {}", path, std::strerror(in.error)));
+    if (!in) throw std::runtime_error(fmt::format("mesh file '{}': {}", path, in.problem));
     errno = 0;
-    file_ = gzopen(path.c_str(), "rb");
+    file_ = gzdopen(in.fd.get(), "rb");
     if (!file_)
       throw std::runtime_error(fmt::format("cannot open mesh file '{}': {}", path,
                                            errno ? std::strerror(errno) : "out of memory"));
+    in.fd.release();  // gzclose closes it
     gzbuffer(file_, 1 << 17);
   }
   ~LineReader() { gzclose(file_); }
@@ -55,6 +65,9 @@ class LineReader {
       }
       const size_t n = std::strlen(buf);
       line.append(buf, n);
+      if (line.size() > kMaxLineBytes)
+        throw std::runtime_error(fmt::format("{}:{}: line is longer than {} bytes: not a text mesh file?", path_,
+                                             line_no_ + 1, kMaxLineBytes));
       if (n > 0 && buf[n - 1] == '\n') break;
     }
     ++line_no_;

@@ -70,14 +70,17 @@ TEST(ConfigTree, EveryFieldIsAProperty) {
   EXPECT_EQ(propertiesUnder("early_depth"), fieldCount<EarlyDepthConfig>());
   EXPECT_EQ(propertiesUnder("lock"), fieldCount<LockConfig>());
   EXPECT_EQ(propertiesUnder("cache"), fieldCount<CacheConfig>());
+  EXPECT_EQ(propertiesUnder("memory"), fieldCount<MemoryLayoutConfig>());
+  EXPECT_EQ(propertiesUnder("l2"), fieldCount<SharedCacheConfig>());
+  EXPECT_EQ(propertiesUnder("l3"), fieldCount<SharedCacheConfig>());
   EXPECT_EQ(propertiesUnder("alu"), fieldCount<AluConfig>());
   EXPECT_EQ(propertiesUnder("dram"), fieldCount<DramConfig>());
   EXPECT_EQ(propertiesUnder("stats"), fieldCount<StatsConfig>());
   EXPECT_EQ(propertiesUnder("skip"), fieldCount<SkipConfig>());
   EXPECT_EQ(propertiesUnder("sim"), fieldCount<SimConfig>());
   EXPECT_EQ(fieldCount<ClockConfig>(), 1u);  // the counter itself works
-  EXPECT_EQ(fieldCount<DramConfig>(), 16u);
-  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 52u);
+  EXPECT_EQ(fieldCount<DramConfig>(), 23u);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").properties().size(), 90u);  // 52 + 20 (issue 21's levels) + 7 (its DRAM controller) + stats.level_miss_classes + 10 (issue 22: alu work costs, abuffer.*)
 }
 
 TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
@@ -110,64 +113,129 @@ TEST(ConfigTree, PropertiesHaveUnitsAndDescriptions) {
   EXPECT_FALSE(get("clock.core_mhz").inferred);
 }
 
-// DRAM refresh is off in both presets; a refresh gap that cannot hold one
-// row's transfer is refused by validate(), naming both properties.
-TEST(ConfigTree, DramRefreshIsValidatedAgainstTheRowTransfer) {
-  for (const std::string& preset : presetNames()) EXPECT_EQ(ConfigTree::forPreset(preset).config().dram.trefi_ns, 0.0);
+// DRAM refresh is on in both presets with their memories' values (igpu DDR3
+// JEDEC: 7.8 us, 260 ns for 4 Gb; dgpu GDDR5: 1.9 us, 110 ns, CONFIG.md); a
+// refresh gap that cannot hold an activate, CL and one burst is refused by
+// validate(), naming both properties.
+TEST(ConfigTree, DramRefreshIsOnAndValidated) {
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trefi_ns, 7800.0);
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config().dram.trfc_ns, 260.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trefi_ns, 1900.0);
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config().dram.trfc_ns, 110.0);
   ConfigTree t = ConfigTree::forPreset("igpu");
-  t.set("dram.trefi_ns", "7800");
-  t.set("dram.trfc_ns", "350");
-  EXPECT_NO_THROW(t.validate());
-  t.set("dram.trefi_ns", "1000");
+  t.set("dram.trefi_ns", "300");
+  EXPECT_NO_THROW(t.validate());  // 40 ns left: an activate and CL (27.5 ns) and a burst (5 ns)
+  t.set("dram.trefi_ns", "290");
   std::string e = errorOf([&] { t.validate(); });
-  EXPECT_NE(e.find("dram.trefi_ns (1000 ns) minus dram.trfc_ns (350 ns) must be at least the longest transfer booked "
-                   "as one, a row of 8192 bytes on a closed bank (667.5 ns here)"),
+  EXPECT_NE(e.find("dram.trefi_ns (290 ns) minus dram.trfc_ns (260 ns) must hold an activate, CL and one burst "
+                   "of 64 bytes (32.5 ns here)"),
             std::string::npos)
       << e;
   t.set("dram.trfc_ns", "0");
   e = errorOf([&] { t.validate(); });
   EXPECT_NE(e.find("dram.trefi_ns > 0 needs dram.trfc_ns > 0"), std::string::npos) << e;
+  t.set("dram.trefi_ns", "0");  // off
+  EXPECT_NO_THROW(t.validate());
 }
 
-TEST(ConfigTree, PresetNames) {
-  EXPECT_EQ(presetNames(), (std::vector<std::string>{"igpu", "dgpu"}));
+// The write queue's watermarks out of order are refused by validate(), one
+// line each naming the parameters and the rule; sizes of 0 and unknown
+// schedulers by their range.
+TEST(ConfigTree, DramControllerSettingsAreValidated) {
+  ConfigTree t = ConfigTree::forPreset("igpu");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.write_low", "56");  // = write_high
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_low (56) >= dram.write_high (56): the low watermark must be below the high one"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_low", "32");
+  t.set("dram.write_high", "80");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.write_high (80) > dram.write_queue (64): the high watermark must fit in the write queue"),
+            std::string::npos)
+      << e;
+  t.set("dram.write_queue", "80");
+  EXPECT_NO_THROW(t.validate());  // the high watermark may be the whole queue
+  e = errorOf([&] { t.set("dram.write_queue", "0"); });
+  EXPECT_EQ(e, "dram.write_queue: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.write_high", "0"); });
+  EXPECT_EQ(e, "dram.write_high: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.queue_depth", "0"); });
+  EXPECT_EQ(e, "dram.queue_depth: '0' is out of range; expected an integer [1, 4096] (bursts)");
+  e = errorOf([&] { t.set("dram.scheduler", "fifo"); });
+  EXPECT_EQ(e, "dram.scheduler: 'fifo' is not a known value; expected one of fcfs | frfcfs");
+}
+
+TEST(ConfigTree, PresetNamesAndAliases) {
+  EXPECT_EQ(presetNames(), (std::vector<std::string>{"iris-pro-5200", "titan-x-maxwell", "navi21"}));
+  EXPECT_EQ(canonicalPresetName("igpu"), "iris-pro-5200");
+  EXPECT_EQ(canonicalPresetName("dgpu"), "titan-x-maxwell");
+  EXPECT_EQ(canonicalPresetName("navi21"), "navi21");
   const std::string e = errorOf([] { ConfigTree::forPreset("apu"); });
   EXPECT_NE(e.find("unknown preset 'apu'"), std::string::npos) << e;
-  EXPECT_NE(e.find("igpu, dgpu"), std::string::npos) << e;
+  EXPECT_NE(e.find("iris-pro-5200, titan-x-maxwell, navi21"), std::string::npos) << e;
+  EXPECT_NE(e.find("igpu = iris-pro-5200"), std::string::npos) << e;
+  // An alias is the preset it names, under the preset's own name.
+  EXPECT_EQ(ConfigTree::forPreset("igpu").config(), ConfigTree::forPreset("iris-pro-5200").config());
+  EXPECT_EQ(ConfigTree::forPreset("dgpu").config(), ConfigTree::forPreset("titan-x-maxwell").config());
+  EXPECT_EQ(ConfigTree::forPreset("igpu").preset(), "iris-pro-5200");
+  // A file written for an alias loads under the preset (and the other way round).
+  TempFile f("alias.json", R"({"preset": "igpu", "lock": {"capacity": 64}})");
+  EXPECT_EQ(resolveConfig("iris-pro-5200", f.path(), {}).lock.capacity, 64u);
+  EXPECT_EQ(resolveConfig("", f.path(), {}).preset, "iris-pro-5200");
 }
 
-TEST(ConfigTree, IgpuPreset) {
-  const ConfigTree t = ConfigTree::forPreset("igpu");
+TEST(ConfigTree, IrisPro5200Preset) {
+  const ConfigTree t = ConfigTree::forPreset("iris-pro-5200");
   const RopConfig& c = t.config();
-  EXPECT_EQ(c, RopConfig{});  // RopConfig's defaults are the igpu preset
-  EXPECT_EQ(c.preset, "igpu");
+  EXPECT_EQ(c.preset, "iris-pro-5200");
   EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1150.0);
-  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 25.6);
-  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 4u);  // 4 px/clk in total
-  EXPECT_EQ(c.cache.size_bytes, 64u * 1024);                   // 2 x 64 KiB over 2 partitions
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 25.6);  // dual-channel DDR3-1600
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 4u);     // 4 px/clk in total
+  EXPECT_EQ(c.cache.size_bytes, 64u * 1024);                      // 2 x 64 KiB over 2 partitions
+  EXPECT_EQ(c.cache.line_bytes, 64u);
+  EXPECT_EQ(c.l2.size_bytes, 6u << 20);     // the 6 MB LLC
+  EXPECT_EQ(c.l3.size_bytes, 128u << 20);   // the 128 MB eDRAM
+  EXPECT_TRUE(c.l3.victim_only);            // filled with the LLC's evictions
   EXPECT_EQ(c.dram.cl, 11u);
   EXPECT_EQ(c.dram.trcd, 11u);
   EXPECT_EQ(c.dram.trp, 11u);
   EXPECT_DOUBLE_EQ(c.dram.tck_ns, 1.25);
   EXPECT_EQ(c.dram.banks, 8u);
+  // Apart from its caches it is the struct's base.
+  RopConfig base;
+  base.l2 = c.l2;
+  base.l3 = c.l3;
+  EXPECT_EQ(c, base);
   EXPECT_NO_THROW(t.validate());
 }
 
-TEST(ConfigTree, DgpuPreset) {
-  const ConfigTree t = ConfigTree::forPreset("dgpu");
+TEST(ConfigTree, TitanXMaxwellPreset) {
+  const ConfigTree t = ConfigTree::forPreset("titan-x-maxwell");
   const RopConfig& c = t.config();
-  EXPECT_EQ(c.preset, "dgpu");
-  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1216.0);
-  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 224.0);
-  EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 56.0);
-  EXPECT_EQ(c.partitions.count, 4u);
-  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 64u);
+  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 1075.0);
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 336.0);  // 384-bit GDDR5 at 7 Gbps
+  EXPECT_EQ(c.partitions.count, 6u);                               // six memory controllers
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 96u);     // 96 ROPs
+  EXPECT_EQ(c.l2.size_bytes, 3u << 20);
+  EXPECT_EQ(c.l2.slices, 6u);
+  EXPECT_EQ(c.l3.size_bytes, 0u);
   EXPECT_EQ(c.dram.cl, 24u);
-  EXPECT_EQ(c.dram.trcd, 24u);
-  EXPECT_EQ(c.dram.trp, 24u);
   EXPECT_DOUBLE_EQ(c.dram.tck_ns, 0.667);
   EXPECT_EQ(c.dram.banks, 16u);
-  EXPECT_EQ(c.cache.size_bytes, 512u * 1024);
+  EXPECT_NO_THROW(t.validate());
+}
+
+TEST(ConfigTree, Navi21Preset) {
+  const ConfigTree t = ConfigTree::forPreset("navi21");
+  const RopConfig& c = t.config();
+  EXPECT_DOUBLE_EQ(c.clock.core_mhz, 2015.0);
+  EXPECT_DOUBLE_EQ(c.dram.channels * c.dram.channel_gbps, 512.0);  // 256-bit GDDR6 at 16 Gbps
+  EXPECT_EQ(c.partitions.count * c.alu.blends_per_clock, 128u);    // 128 ROPs
+  EXPECT_EQ(c.l2.size_bytes, 4u << 20);
+  EXPECT_EQ(c.l3.size_bytes, 128u << 20);  // Infinity Cache
+  EXPECT_FALSE(c.l3.victim_only);
   EXPECT_NO_THROW(t.validate());
 }
 
@@ -242,7 +310,7 @@ TEST(ConfigTree, ApproximateEngineRefusesLockModesItDoesNotModel) {
     t.set("sim.engine", "approximate");
     t.set("lock.mode", mode);
     EXPECT_EQ(errorOf([&] { t.validate(); }),
-              std::string("invalid configuration (preset igpu): lock.mode=") + mode +
+              std::string("invalid configuration (preset iris-pro-5200): lock.mode=") + mode +
                   " is not modelled by sim.engine=approximate (it visits fragments in submission order, so it "
                   "cannot apply inserts in lock-entry order or race them); use sim.engine=cycle or "
                   "lock.mode=ordered");
@@ -351,7 +419,7 @@ TEST(ConfigTree, CrossFieldValidation) {
   ConfigTree c = ConfigTree::forPreset("igpu");
   c.set("cache.size_bytes", "3000");
   e = errorOf([&] { c.validate(); });
-  EXPECT_NE(e.find("cache.size_bytes (3000) is not a multiple of cache.ways x tile pixels x 4 bytes"),
+  EXPECT_NE(e.find("cache.size_bytes (3000) is not a multiple of cache.ways x cache.line_bytes (8 x 64 = 512)"),
             std::string::npos)
       << e;
 
@@ -362,7 +430,8 @@ TEST(ConfigTree, CrossFieldValidation) {
 }
 
 TEST(ConfigTree, CacheGeometry) {
-  const CacheConfig& igpu = ConfigTree::forPreset("igpu").config().cache;
+  // A copy: a reference into forPreset()'s temporary would dangle (ASan).
+  const CacheConfig igpu = ConfigTree::forPreset("igpu").config().cache;
   const CacheGeometry g = cacheGeometry(igpu, 64 * 16);  // 8x8 tile, 16 bytes per pixel
   EXPECT_EQ(g.ways, 8u);
   EXPECT_EQ(g.sets, 8u);
@@ -472,16 +541,16 @@ TEST(ConfigTree, JsonRepeatedKeyInOneObjectIsAnError) {
 
 TEST(ConfigTree, PrecedencePresetFileSet) {
   TempFile f("prec.json", R"({"dram": {"channels": 3, "banks": 4}, "clock.core_mhz": 900})");
-  // dgpu preset: 4 channels, 16 banks, 1216 MHz; file: 3 channels, 4 banks, 900 MHz; set: 5 channels.
+  // dgpu (titan-x-maxwell) preset: 6 channels, 16 banks, 1075 MHz; file: 3 channels, 4 banks, 900 MHz; set: 5 channels.
   const RopConfig c = resolveConfig("dgpu", f.path(), {"dram.channels=5"});
   EXPECT_EQ(c.dram.channels, 5u);                // --set beats the file
   EXPECT_EQ(c.dram.banks, 4u);                   // the file beats the preset
   EXPECT_DOUBLE_EQ(c.clock.core_mhz, 900.0);     // the file beats the preset
   EXPECT_DOUBLE_EQ(c.dram.channel_gbps, 56.0);   // the preset where nobody overrides
-  EXPECT_EQ(c.preset, "dgpu");
+  EXPECT_EQ(c.preset, "titan-x-maxwell");
   // Later --set wins over an earlier one.
   EXPECT_EQ(resolveConfig("igpu", "", {"dram.channels=2", "dram.channels=7"}).dram.channels, 7u);
-  EXPECT_EQ(resolveConfig("", "", {}), RopConfig{});  // igpu by default
+  EXPECT_EQ(resolveConfig("", "", {}), presetConfig("iris-pro-5200"));  // the default preset
 }
 
 TEST(ConfigTree, ResolveErrors) {
@@ -526,7 +595,7 @@ TEST(ConfigTree, DescribeListsEveryProperty) {
   t.set("lock.granularity", "quad");
   const std::string d = t.describe();
   for (const auto& p : t.properties()) EXPECT_NE(d.find(p.path + " "), std::string::npos) << p.path;
-  EXPECT_NE(d.find("preset dgpu"), std::string::npos);
+  EXPECT_NE(d.find("preset titan-x-maxwell"), std::string::npos);
   // The changed row shows the preset's value as the default; unchanged rows do not.
   const size_t row = d.find("lock.granularity");
   const std::string line = d.substr(row, d.find('\n', row) - row);
@@ -537,11 +606,11 @@ TEST(ConfigTree, DescribeListsEveryProperty) {
   EXPECT_EQ(d[d.rfind('\n', mhz) + 1], ' ');
 }
 
-TEST(ConfigTree, MarkdownTableHasBothPresets) {
+TEST(ConfigTree, MarkdownTableHasEveryPreset) {
   const std::string md = presetTableMarkdown();
-  EXPECT_NE(md.find("| property | unit | igpu | dgpu |"), std::string::npos);
-  EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| `cache.hit_latency` | cycles | 10 (i) | 80 (i) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| property | unit | iris-pro-5200 | titan-x-maxwell | navi21 |"), std::string::npos);
+  EXPECT_NE(md.find("| `dram.channel_gbps` | GB/s | 12.8 | 56 | 32 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `l2.size_bytes` | bytes | 6291456 | 3145728 | 4194304 (i) |"), std::string::npos) << md;
   EXPECT_NE(md.find("pixel \\| quad \\| tile"), std::string::npos) << md;  // pipes escaped in cells
   // Every row has the header's 6 cells: no unescaped '|' inside a value or description.
   size_t rows = 0;
@@ -552,7 +621,7 @@ TEST(ConfigTree, MarkdownTableHasBothPresets) {
     if (line.empty()) continue;
     size_t pipes = 0;
     for (size_t k = 0; k < line.size(); ++k) pipes += line[k] == '|' && (k == 0 || line[k - 1] != '\\');
-    EXPECT_EQ(pipes, 7u) << line;
+    EXPECT_EQ(pipes, 8u) << line;
     ++rows;
   }
   EXPECT_EQ(rows, 2u + ConfigTree::forPreset("igpu").properties().size());
@@ -566,7 +635,9 @@ TEST(ConfigTree, RateAndBandwidthBounds) {
   ConfigTree t = ConfigTree::forPreset("igpu");
   for (const auto& [path, bad] : {std::pair{"input.fragments_per_clock", "0.0001"}, std::pair{"alu.fp32_rate", "0.0005"},
                                   std::pair{"dram.channel_gbps", "0.01"}, std::pair{"clock.core_mhz", "0.5"}}) {
-    const std::string e = errorOf([&] { t.set(path, bad); });
+    const char* p = path;  // clang 14 cannot capture a structured binding
+    const char* v = bad;
+    const std::string e = errorOf([&] { t.set(p, v); });
     EXPECT_NE(e.find(path), std::string::npos) << e;
     EXPECT_NE(e.find("out of range"), std::string::npos) << e;
   }
@@ -596,4 +667,47 @@ TEST(ConfigTree, PartitionResumeOffsetsFitInHalfACycle) {
                    "not fit in half a 100.0 ps cycle"),
             std::string::npos)
       << e;
+}
+
+// The memory hierarchy's rules: one line naming the parameter and the rule each.
+TEST(ConfigTree, CacheLinesAndSharedLevelsAreValidated) {
+  const auto problem = [](std::vector<std::string> sets) {
+    return errorOf([&] { resolveConfig("iris-pro-5200", "", sets); });
+  };
+  EXPECT_NE(problem({"cache.size_bytes=1024", "cache.ways=1", "cache.line_bytes=2048"}).find("cache.line_bytes"),
+            std::string::npos);  // out of range (at most 1024) already
+  // (A ROP-cache line never exceeds the cache: lines are at most 1 KiB, caches at least 1 KiB.)
+  std::string e = problem({"cache.line_bytes=128", "cache.sector_bytes=48"});
+  EXPECT_NE(e.find("cache.sector_bytes (48) must be a power of two dividing cache.line_bytes (128)"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=64", "cache.sector_bytes=128"});
+  EXPECT_NE(e.find("cache.sector_bytes (128) must be a power of two dividing cache.line_bytes (64)"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=1024", "cache.sector_bytes=16"});
+  EXPECT_NE(e.find("cache.line_bytes (1024) holds 64 sectors of cache.sector_bytes (16); at most 32"),
+            std::string::npos) << e;
+  e = problem({"cache.line_bytes=128"});  // the LLC's lines are 64 bytes
+  EXPECT_NE(e.find("l2.line_bytes (64) is smaller than cache.line_bytes (128): a line of the level above must fit in "
+                   "one l2 line"),
+            std::string::npos) << e;
+  e = problem({"l2.line_bytes=128"});  // the eDRAM's lines are 64 bytes
+  EXPECT_NE(e.find("l3.line_bytes (64) is smaller than l2.line_bytes (128)"), std::string::npos) << e;
+  e = problem({"l2.size_bytes=0"});
+  EXPECT_NE(e.find("l3.size_bytes is set but l2.size_bytes is 0"), std::string::npos) << e;
+  e = problem({"l2.size_bytes=5000000"});
+  EXPECT_NE(e.find("l2.size_bytes (5000000) is not a multiple of l2.slices x l2.ways x l2.line_bytes (4 x 12 x 64 = "
+                   "3072)"),
+            std::string::npos) << e;
+  e = problem({"l2.size_bytes=1024", "l2.ways=1", "l2.slices=1", "l2.line_bytes=4096"});
+  EXPECT_NE(e.find("l2.line_bytes (4096) is larger than the cache, l2.size_bytes (1024)"), std::string::npos) << e;
+  e = problem({"l3.sector_bytes=24"});
+  EXPECT_NE(e.find("l3.sector_bytes (24) must be a power of two dividing l3.line_bytes (64)"), std::string::npos)
+      << e;
+  // One violation is one line; several are listed one line each.
+  e = problem({"l2.size_bytes=0"});
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  e = problem({"cache.sector_bytes=48", "l2.size_bytes=0"});
+  EXPECT_NE(e.find(":\n  cache.sector_bytes (48)"), std::string::npos) << e;
+  EXPECT_NE(e.find("\n  l3.size_bytes is set"), std::string::npos) << e;
+  EXPECT_NO_THROW(resolveConfig("iris-pro-5200", "", {"l3.size_bytes=0", "l2.size_bytes=0"}));
 }

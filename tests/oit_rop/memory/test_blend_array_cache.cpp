@@ -9,6 +9,7 @@
 
 #include "oit_rop/TestLcg.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
+#include "oit_rop/memory/DramSystem.hpp"
 
 namespace oit::rop {
 namespace {
@@ -38,12 +39,22 @@ CacheConfig cacheOf(uint32_t lines, unsigned ways, unsigned miss_queue = 16, uns
   return c;
 }
 
+// Most tests use one line per tile (the old tile-sized lines): a tile's
+// arrays are one line of `bytes`, read whole and, for a write, written whole.
+TileLines oneLine(uint32_t bytes = kLine) { return {bytes, bytes, 1}; }
+constexpr LineTouch kReadLine{0, 1, 0}, kWriteLine{0, 1, 1};
+std::span<const LineTouch> whole(bool write) { return {write ? &kWriteLine : &kReadLine, 1}; }
+Cycle acquire(BlendArrayCache& cache, Cycle now, uint32_t tile, bool write) {
+  return cache.acquire(now, tile, whole(write));
+}
+bool release(BlendArrayCache& cache, uint32_t tile) { return cache.release(tile, whole(false)); }
+
 // One access whose use ends at once (acquire, then release when accepted):
 // for the tests of LRU, fills and the miss queue, where no line stays in use.
 // (Lines in use are the subject of the LinesInUse tests below.)
 Cycle use(BlendArrayCache& cache, Cycle now, uint32_t tile, bool write) {
-  const Cycle t = cache.acquire(now, tile, write);
-  if (t != kNever) cache.release(tile);
+  const Cycle t = acquire(cache, now, tile, write);
+  if (t != kNever) release(cache, tile);
   return t;
 }
 
@@ -58,32 +69,34 @@ Cycle acquireRetrying(BlendArrayCache& cache, Cycle& now, uint32_t tile, bool wr
 
 TEST(BlendArrayCache, Geometry) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache a(cacheOf(16, 4), kLine, 100, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache a(cacheOf(16, 4), oneLine(), 100, 0, port, false);
   EXPECT_EQ(a.lines(), 16u);
   EXPECT_EQ(a.sets(), 4u);
   EXPECT_EQ(a.ways(), 4u);
   EXPECT_EQ(a.lineBytes(), kLine);
   // Fewer lines than ways: one fully associative set.
-  BlendArrayCache b(cacheOf(3, 8), kLine, 100, 0, mem, false);
+  BlendArrayCache b(cacheOf(3, 8), oneLine(), 100, 0, port, false);
   EXPECT_EQ(b.lines(), 3u);
   EXPECT_EQ(b.sets(), 1u);
   // 10 lines, 4 ways: 2 full sets; the 2 lines left over are not modelled.
-  BlendArrayCache c(cacheOf(10, 4), kLine, 100, 0, mem, false);
+  BlendArrayCache c(cacheOf(10, 4), oneLine(), 100, 0, port, false);
   EXPECT_EQ(c.lines(), 8u);
   EXPECT_EQ(c.sets(), 2u);
   // Smaller than one line: refused (it was modelled as one line, larger than configured).
   CacheConfig tiny = cacheOf(1, 8);
   tiny.size_bytes = kLine / 2;
-  EXPECT_THROW(BlendArrayCache(tiny, kLine, 100, 0, mem, false), std::invalid_argument);
+  EXPECT_THROW(BlendArrayCache(tiny, oneLine(), 100, 0, port, false), std::invalid_argument);
   tiny.size_bytes = kLine;
-  BlendArrayCache d(tiny, kLine, 100, 0, mem, false);
+  BlendArrayCache d(tiny, oneLine(), 100, 0, port, false);
   EXPECT_EQ(d.lines(), 1u);
   EXPECT_EQ(d.lineAddress(3), 3u * kLine);
 }
 
 TEST(BlendArrayCache, HitLatencyAndMissLatency) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4), oneLine(), 64, 0, port, false);
   EXPECT_EQ(use(cache, 0, 0, false), 78u);         // fill from DRAM
   EXPECT_EQ(use(cache, 500, 0, false), 510u);      // hit: now + hit_latency
   EXPECT_TRUE(cache.resident(0));
@@ -92,12 +105,13 @@ TEST(BlendArrayCache, HitLatencyAndMissLatency) {
 
 TEST(BlendArrayCache, DirtyVictimIsWrittenBackBeforeTheLineIsAvailable) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(1, 1), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(1, 1), oneLine(), 64, 0, port, false);
   EXPECT_EQ(use(cache, 0, 0, true), 78u);
-  // At 1000: write-back of tile 0 (row 0 open: 40 + CL 11 + 16 -> 1067), then
-  // the fill of tile 1 (same row; its column read issues at 1040 but the bus
-  // is booked until 1067) -> 1083.
-  EXPECT_EQ(use(cache, 1000, 1, false), 1083u);
+  // At 1000: the write-back of tile 0 is posted (the DRAM controller accepts
+  // it at 1040 into its write queue, MEMORY.md) and the fill of tile 1 reads
+  // first (row 0 open: 40 + CL 11 + 16 -> 1067).
+  EXPECT_EQ(use(cache, 1000, 1, false), 1067u);
   EXPECT_EQ(mem.stats().write_bytes[unsigned(Surface::BlendArrays)], kLine);
   EXPECT_EQ(mem.stats().read_bytes[unsigned(Surface::BlendArrays)], 2 * kLine);
   EXPECT_EQ(cache.stats().evictions, 1u);
@@ -109,7 +123,8 @@ TEST(BlendArrayCache, StreamingHitRateIsRMinusOneOverR) {
   // compulsory miss then r - 1 hits (hits under the fill count as hits).
   for (unsigned r : {1u, 2u, 3u, 4u, 8u}) {
     MemorySystem mem(roundDram(), kMhz);
-    BlendArrayCache cache(cacheOf(8, 2), kLine, 64, 0, mem, false);
+    DramPort port(mem);
+    BlendArrayCache cache(cacheOf(8, 2), oneLine(), 64, 0, port, false);
     Cycle now = 0;
     for (uint32_t t = 0; t < 64; ++t)
       for (unsigned i = 0; i < r; ++i, ++now) acquireRetrying(cache, now, t, false);
@@ -129,7 +144,8 @@ TEST(BlendArrayCache, StreamingHitRateIsRMinusOneOverR) {
 TEST(BlendArrayCache, CyclicSweepLargerThanCacheNeverHitsUnderLru) {
   // LRU's worst case: 2 sweeps over 2x capacity, every access misses.
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(8, 2), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(8, 2), oneLine(), 64, 0, port, false);
   Cycle now = 0;
   for (int sweep = 0; sweep < 2; ++sweep)
     for (uint32_t t = 0; t < 16; ++t, ++now) acquireRetrying(cache, now, t, false);
@@ -139,7 +155,8 @@ TEST(BlendArrayCache, CyclicSweepLargerThanCacheNeverHitsUnderLru) {
 
 TEST(BlendArrayCache, ArraysThatFitMissOnlyOnce) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4), oneLine(), 64, 0, port, false);
   Cycle now = 0;
   for (uint32_t t = 0; t < 16; ++t, ++now) acquireRetrying(cache, now, t, false);
   EXPECT_EQ(cache.stats().misses, 16u);
@@ -155,7 +172,8 @@ TEST(BlendArrayCache, ArraysThatFitMissOnlyOnce) {
 TEST(BlendArrayCache, LruVictimInATwoWaySet) {
   // 4 lines, 2 ways -> 2 sets; even tiles share set 0.
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(4, 2), kLine, 64, 0, mem, true);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(4, 2), oneLine(), 64, 0, port, true);
   use(cache, 0, 1, false);  // set 1, must stay untouched by set 0's traffic
   use(cache, 1, 0, false);
   use(cache, 2, 2, false);
@@ -175,7 +193,8 @@ TEST(BlendArrayCache, LruVictimInATwoWaySet) {
 
 TEST(BlendArrayCache, LruInAFullyAssociativeCache) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(3, 8), kLine, 64, 0, mem, true);  // 3 lines, 1 set
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(3, 8), oneLine(), 64, 0, port, true);  // 3 lines, 1 set
   for (uint32_t t : {0u, 1u, 2u, 0u}) use(cache, t, t, false);
   use(cache, 10, 3, false);  // LRU is 1
   EXPECT_FALSE(cache.resident(1));
@@ -189,7 +208,8 @@ TEST(BlendArrayCache, DirtyEvictionsWriteExactlyTheirLines) {
   // evicts dirty 4..7 and clean 8..11: 12 evictions, 8 write-backs.
   for (bool fast_clear : {false, true}) {
     MemorySystem mem(roundDram(), kMhz);
-    BlendArrayCache cache(cacheOf(4, 2), kLine, 64, 0, mem, fast_clear);
+    DramPort port(mem);
+    BlendArrayCache cache(cacheOf(4, 2), oneLine(), 64, 0, port, fast_clear);
     Cycle now = 0;
     for (uint32_t t = 0; t < 8; ++t, ++now) acquireRetrying(cache, now, t, true);
     for (uint32_t t = 8; t < 16; ++t, ++now) acquireRetrying(cache, now, t, false);
@@ -210,9 +230,11 @@ TEST(BlendArrayCache, WriteBackGoesToTheVictimsAddress) {
     DramConfig d = roundDram(2);
     d.interleave_bytes = kLine;
     MemorySystem mem(d, kMhz);
-    BlendArrayCache cache(cacheOf(1, 1), kLine, 64, base, mem, true);
+    DramPort port(mem);
+    BlendArrayCache cache(cacheOf(1, 1), oneLine(), 64, base, port, true);
     use(cache, 0, 1, true);   // clear fill, dirty
     use(cache, 10, 2, false); // clear fill; evicts dirty tile 1 -> write base + 256
+    mem.drainWrites(100);     // the posted write-back reaches the bus
     const unsigned ch = unsigned((base / kLine + 1) % 2);
     EXPECT_EQ(mem.stats().channel_busy[ch], 16u) << base;
     EXPECT_EQ(mem.stats().channel_busy[1 - ch], 0u) << base;
@@ -222,7 +244,8 @@ TEST(BlendArrayCache, WriteBackGoesToTheVictimsAddress) {
 
 TEST(BlendArrayCache, FastClearFirstTouchNeedsNoDramRead) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(4, 2), kLine, 64, 0, mem, true);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(4, 2), oneLine(), 64, 0, port, true);
   for (uint32_t t = 0; t < 4; ++t) EXPECT_EQ(use(cache, 100 + t, t, t % 2 == 0), 110u + t);
   EXPECT_EQ(mem.stats().readBytes(), 0u);
   EXPECT_EQ(cache.stats().clear_fills, 4u);
@@ -241,7 +264,8 @@ TEST(BlendArrayCache, FastClearFirstTouchNeedsNoDramRead) {
 
 TEST(BlendArrayCache, WithoutFastClearFirstTouchReadsALine) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4), oneLine(), 64, 0, port, false);
   Cycle now = 0;
   for (uint32_t t = 0; t < 10; ++t, ++now) acquireRetrying(cache, now, t, true);
   EXPECT_EQ(mem.stats().read_bytes[unsigned(Surface::BlendArrays)], 10u * kLine);
@@ -250,7 +274,8 @@ TEST(BlendArrayCache, WithoutFastClearFirstTouchReadsALine) {
 
 TEST(BlendArrayCache, MissQueueFullRefusesAndCounts) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/2), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/2), oneLine(), 64, 0, port, false);
   EXPECT_EQ(use(cache, 0, 0, false), 78u);
   EXPECT_EQ(use(cache, 0, 1, false), 94u);  // same row, queued 16 cycles behind on the bus
   EXPECT_EQ(cache.missesInFlight(0), 2u);
@@ -270,7 +295,8 @@ TEST(BlendArrayCache, MissQueueFullRefusesAndCounts) {
 
 TEST(BlendArrayCache, HitUnderMissWaitsForTheFillAndCountsAsHit) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4), kLine, 16, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4), oneLine(), 16, 0, port, false);
   EXPECT_EQ(use(cache, 0, 5, false), 78u);
   EXPECT_EQ(use(cache, 1, 5, true), 78u);
   EXPECT_EQ(use(cache, 70, 5, false), 80u);  // fill done by then + hit latency
@@ -410,9 +436,10 @@ TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
     for (bool fast_clear : {false, true}) {
       DramConfig d = roundDram(1 + cases % 3);
       MemorySystem mem(d, kMhz), ref_mem(d, kMhz);
+      DramPort port(mem);
       const CacheConfig cfg = cacheOf(sh.lines, sh.ways, sh.miss_queue, sh.hit_latency);
       const uint64_t base = uint64_t(cases) << 20;
-      BlendArrayCache cache(cfg, kLine, sh.tiles, base, mem, fast_clear);
+      BlendArrayCache cache(cfg, oneLine(), sh.tiles, base, port, fast_clear);
       ReferenceCache ref(cfg, kLine, sh.tiles, base, ref_mem, fast_clear);
       const std::string what = std::to_string(sh.lines) + " lines " + std::to_string(sh.ways) + " ways mq " +
                                std::to_string(sh.miss_queue) + (fast_clear ? " fast clear" : "");
@@ -471,7 +498,8 @@ TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
 // older, then the least recently used; hits refresh the LRU order.
 TEST(BlendArrayCache, FirstInvalidWayThenLeastRecentlyUsed) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(4, 4), kLine, 16, 0, mem, true);  // one set of 4 ways
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(4, 4), oneLine(), 16, 0, port, true);  // one set of 4 ways
   use(cache, 0, 0, false);
   use(cache, 1, 1, false);
   use(cache, 2, 0, false);  // hit
@@ -492,7 +520,8 @@ TEST(BlendArrayCache, FirstInvalidWayThenLeastRecentlyUsed) {
 // entries busy right after an accepted miss, including when `now` goes back.
 TEST(BlendArrayCache, MissQueueEntriesFreeByTimeAndPeakCountsBusyOnes) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/3), kLine, 64, 0, mem, true);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(16, 4, /*miss_queue=*/3), oneLine(), 64, 0, port, true);
   // Fast clear: fills are ready at now + 10.
   EXPECT_EQ(use(cache, 100, 0, false), 110u);
   EXPECT_EQ(use(cache, 100, 1, false), 110u);
@@ -516,10 +545,11 @@ TEST(BlendArrayCache, MissQueueEntriesFreeByTimeAndPeakCountsBusyOnes) {
 
 TEST(BlendArrayCache, RejectsBadInput) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(4, 2), kLine, 8, 0, mem, true);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(4, 2), oneLine(), 8, 0, port, true);
   EXPECT_THROW(use(cache, 0, 8, false), std::out_of_range);
-  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2, 0), kLine, 8, 0, mem, true), std::invalid_argument);
-  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), 0, 8, 0, mem, true), std::invalid_argument);
+  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2, 0), oneLine(), 8, 0, port, true), std::invalid_argument);
+  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), oneLine(0), 8, 0, port, true), std::invalid_argument);
 }
 
 TEST(BlendArrayCache, Deterministic) {
@@ -529,8 +559,9 @@ TEST(BlendArrayCache, Deterministic) {
   };
   auto run = [] {
     MemorySystem mem(DramConfig{}, 1150.0);
+    DramPort port(mem);
     CacheConfig c;  // igpu defaults: 128 KiB, 8 ways, 16-entry miss queue
-    BlendArrayCache cache(c, 2048, 14400, 1 << 24, mem, true);
+    BlendArrayCache cache(c, oneLine(2048), 14400, 1 << 24, port, true);
     uint64_t x = 99, sum = 0;
     Cycle now = 0;
     for (int i = 0; i < 50000; ++i) {
@@ -557,9 +588,10 @@ TEST(BlendArrayCache, Deterministic) {
 // second layer hits everywhere.
 TEST(BlendArrayCache, ExactlyFittingCacheMissesEachTileOnceInRasterOrder) {
   MemorySystem mem(roundDram(), kMhz);
+  DramPort port(mem);
   CacheConfig cfg = cacheOf(1, 8);
   cfg.size_bytes = 128 * 1024;
-  BlendArrayCache cache(cfg, 2048, 64, 0, mem, false);
+  BlendArrayCache cache(cfg, oneLine(2048), 64, 0, port, false);
   ASSERT_EQ(cache.lines(), 64u);
   ASSERT_EQ(cache.sets(), 8u);
   Cycle now = 0;
@@ -578,36 +610,37 @@ TEST(BlendArrayCache, ExactlyFittingCacheMissesEachTileOnceInRasterOrder) {
 // blended into lines already written back.
 TEST(BlendArrayCache, LinesInUseAreNeverVictims) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(2, 2), kLine, 8, 0, mem, false);  // one set of 2 ways
-  const Cycle r0 = cache.acquire(0, 0, true);
-  const Cycle r1 = cache.acquire(1, 1, true);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(2, 2), oneLine(), 8, 0, port, false);  // one set of 2 ways
+  const Cycle r0 = acquire(cache, 0, 0, true);
+  const Cycle r1 = acquire(cache, 1, 1, true);
   ASSERT_NE(r0, kNever);
   ASSERT_NE(r1, kNever);
   EXPECT_EQ(cache.linesInUse(), 2u);
   // Both ways in use: tile 2 is refused (not counted as an access) and the
   // refusal says the set, not the miss queue, is why.
-  EXPECT_EQ(cache.acquire(2, 2, true), kNever);
+  EXPECT_EQ(acquire(cache, 2, 2, true), kNever);
   EXPECT_TRUE(cache.refusedBySet());
   EXPECT_EQ(cache.stats().set_in_use, 1u);
   EXPECT_EQ(cache.stats().accesses, 2u);
   EXPECT_TRUE(cache.resident(0));
   EXPECT_TRUE(cache.resident(1));
   // A hit on a line in use is fine (no victim needed) and pins it once more.
-  EXPECT_NE(cache.acquire(3, 1, false), kNever);
+  EXPECT_NE(acquire(cache, 3, 1, false), kNever);
   // Releasing tile 1 once leaves it in use (two acquires); the second release
   // frees it, which the refused set is told about.
-  EXPECT_FALSE(cache.release(1));
-  EXPECT_TRUE(cache.release(1));
+  EXPECT_FALSE(release(cache, 1));
+  EXPECT_TRUE(release(cache, 1));
   EXPECT_EQ(cache.linesInUse(), 1u);
-  const Cycle r2 = cache.acquire(r1 + 1, 2, true);
+  const Cycle r2 = acquire(cache, r1 + 1, 2, true);
   ASSERT_NE(r2, kNever);
   EXPECT_FALSE(cache.resident(1));  // the line out of use went, though 0 is older
   EXPECT_TRUE(cache.resident(0));
   EXPECT_EQ(cache.stats().evictions, 1u);
   EXPECT_EQ(cache.stats().writebacks, 1u);
   // Releasing a tile with no acquire in use is a caller bug.
-  EXPECT_THROW(cache.release(1), std::logic_error);
-  EXPECT_THROW(cache.release(5), std::logic_error);
+  EXPECT_THROW(release(cache, 1), std::logic_error);
+  EXPECT_THROW(release(cache, 5), std::logic_error);
 }
 
 // touch() is acquire() and release() in one call (the approximate engine):
@@ -615,7 +648,8 @@ TEST(BlendArrayCache, LinesInUseAreNeverVictims) {
 // counts the same as the pair, and leaves no line in use.
 TEST(BlendArrayCache, TouchIsAcquireThenRelease) {
   MemorySystem mem_a(roundDram(), kMhz), mem_b(roundDram(), kMhz);
-  BlendArrayCache a(cacheOf(8, 2, 2), kLine, 64, 0, mem_a, false), b(cacheOf(8, 2, 2), kLine, 64, 0, mem_b, false);
+  DramPort port_a(mem_a), port_b(mem_b);
+  BlendArrayCache a(cacheOf(8, 2, 2), oneLine(), 64, 0, port_a, false), b(cacheOf(8, 2, 2), oneLine(), 64, 0, port_b, false);
   testutil::TestLcg rng{99, 33};
   Cycle now = 0;
   uint64_t refused = 0;
@@ -624,7 +658,7 @@ TEST(BlendArrayCache, TouchIsAcquireThenRelease) {
     const uint32_t tile = uint32_t(rng(24));
     const bool write = rng(2) != 0;
     bool missed;
-    const Cycle ta = use(a, now, tile, write), tb = b.touch(now, tile, write, missed);
+    const Cycle ta = use(a, now, tile, write), tb = b.touch(now, tile, whole(write), missed);
     ASSERT_EQ(ta, tb) << "access " << i;
     refused += ta == kNever;
     ASSERT_EQ(b.linesInUse(), 0u);
@@ -640,17 +674,18 @@ TEST(BlendArrayCache, TouchIsAcquireThenRelease) {
 // Fills in flight never exceed the cache's lines, however long the miss queue.
 TEST(BlendArrayCache, MissesInFlightNeverExceedTheLines) {
   MemorySystem mem(roundDram(), kMhz);
-  BlendArrayCache cache(cacheOf(2, 2, 64), kLine, 64, 0, mem, false);
+  DramPort port(mem);
+  BlendArrayCache cache(cacheOf(2, 2, 64), oneLine(), 64, 0, port, false);
   std::vector<std::pair<Cycle, uint32_t>> pending;  // (ready, tile) of accepted acquires
   Cycle now = 0;
   for (uint32_t i = 0; i < 60; ++now) {
     // Uses end 5 cycles after the line arrived (the blend), oldest first.
     while (!pending.empty() && pending.front().first + 5 <= now) {
-      cache.release(pending.front().second);
+      release(cache, pending.front().second);
       pending.erase(pending.begin());
     }
     const uint32_t tile = i % 6;
-    const Cycle r = cache.acquire(now, tile, true);
+    const Cycle r = acquire(cache, now, tile, true);
     if (r == kNever) continue;
     pending.push_back({r, tile});
     ++i;
@@ -667,10 +702,11 @@ TEST(BlendArrayCache, MissesInFlightNeverExceedTheLines) {
 TEST(BlendArrayCache, SetIndexChoosesTheSet) {
   for (bool local : {false, true}) {
     MemorySystem mem(roundDram(), kMhz);
+    DramPort port(mem);
     std::vector<uint32_t> index;
     if (local)
       for (uint32_t t = 0; t < 8; ++t) index.push_back(t / 2);
-    BlendArrayCache cache(cacheOf(4, 2), kLine, 8, 0, mem, false, index);
+    BlendArrayCache cache(cacheOf(4, 2), oneLine(), 8, 0, port, false, index);
     ASSERT_EQ(cache.sets(), 2u);
     Cycle now = 0;
     for (int sweep = 0; sweep < 3; ++sweep)
@@ -678,7 +714,214 @@ TEST(BlendArrayCache, SetIndexChoosesTheSet) {
     EXPECT_EQ(cache.stats().misses, local ? 4u : 12u) << local;
   }
   MemorySystem mem(roundDram(), kMhz);
-  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), kLine, 8, 0, mem, false, {0, 1}), std::invalid_argument);
+  DramPort port(mem);
+  EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), oneLine(), 8, 0, port, false, {0, 1}), std::invalid_argument);
+}
+
+// ---- Lines apart from tiles: several lines per tile, sectors ----------------
+
+// Tiles of 4 lines of 128 B, sectors of 32 B (4 per line): a DRAM that
+// records every request.
+struct Recorder : MemoryPort {
+  struct Req {
+    uint64_t addr;
+    uint32_t bytes;
+    bool write;
+  };
+  std::vector<Req> reqs;
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface) override {
+    reqs.push_back({addr, bytes, write});
+    return now + 50;
+  }
+};
+constexpr TileLines kSectored{128, 32, 4};
+
+CacheConfig sectoredCache(uint32_t lines, unsigned ways, unsigned miss_queue = 16) {
+  CacheConfig c;
+  c.size_bytes = uint64_t(lines) * 128;
+  c.ways = ways;
+  c.miss_queue = miss_queue;
+  c.hit_latency = 10;
+  return c;
+}
+
+TEST(BlendArrayCacheLines, AMissFillsOnlyTheSectorsItReadsAndWritesBackOnlyDirtyOnes) {
+  Recorder below;
+  BlendArrayCache cache(sectoredCache(8, 2), kSectored, 16, 0, below, false);
+  // Tile 1, line 2 (address (1 x 4 + 2) x 128 = 768): read sector 1, write sectors 1 and 2 (2 wholly).
+  const LineTouch t{2, 0b0010, 0b0110};
+  EXPECT_EQ(cache.acquire(0, 1, std::span(&t, 1)), 50u);  // one 32 B fill at 768 + 32
+  ASSERT_EQ(below.reqs.size(), 1u);
+  EXPECT_EQ(below.reqs[0].addr, 800u);
+  EXPECT_EQ(below.reqs[0].bytes, 32u);
+  cache.release(1, std::span(&t, 1));
+  EXPECT_EQ(cache.writtenSectors(1, 2), 0b0110u);
+  EXPECT_EQ(cache.writtenBytes(), 64u);
+  // Sector 3 is not held: a sector miss, another 32 B fill.
+  const LineTouch u{2, 0b1000, 0};
+  EXPECT_EQ(cache.acquire(100, 1, std::span(&u, 1)), 150u);
+  cache.release(1, std::span(&u, 1));
+  EXPECT_EQ(cache.stats().sector_misses, 1u);
+  EXPECT_EQ(cache.stats().misses, 2u);
+  // The dirty sectors 1 and 2 leave as one 64 B write when the line is evicted:
+  // it is line 6 (tile 1 x 4 + 2), set 6 mod 4 = 2, which tiles 2 and 3's
+  // line 2 (lines 10 and 14) share; the second of them evicts it (LRU).
+  const LineTouch r{2, 0b0001, 0};
+  for (uint32_t tile : {2u, 3u}) {
+    ASSERT_NE(cache.acquire(200 + tile, tile, std::span(&r, 1)), kNever);
+    cache.release(tile, std::span(&r, 1));
+  }
+  std::vector<Recorder::Req> writes;
+  for (const auto& q : below.reqs)
+    if (q.write) writes.push_back(q);
+  ASSERT_EQ(writes.size(), 1u);
+  EXPECT_EQ(writes[0].addr, 800u);
+  EXPECT_EQ(writes[0].bytes, 64u);
+  EXPECT_EQ(cache.stats().writeback_bytes, 64u);
+}
+
+TEST(BlendArrayCacheLines, FastClearIsPerSector) {
+  Recorder below;
+  BlendArrayCache cache(sectoredCache(4, 1), kSectored, 16, 0, below, true);  // direct mapped, 4 sets
+  const LineTouch w{0, 0b0001, 0b0001};  // tile 0 line 0: read-modify-write sector 0
+  EXPECT_EQ(cache.acquire(0, 0, std::span(&w, 1)), 10u);  // never written: a clear fill
+  cache.release(0, std::span(&w, 1));
+  const LineTouch e{0, 0b0001, 0};
+  EXPECT_NE(cache.acquire(20, 1, std::span(&e, 1)), kNever);  // tile 1's line 0 shares set 0: evicts it
+  cache.release(1, std::span(&e, 1));
+  ASSERT_EQ(below.reqs.size(), 1u);  // the write-back of sector 0
+  // Back to tile 0: sector 1 was never written (clear, no read); sector 0 comes from below.
+  const LineTouch s1{0, 0b0010, 0};
+  EXPECT_EQ(cache.acquire(40, 0, std::span(&s1, 1)), 50u);
+  cache.release(0, std::span(&s1, 1));
+  EXPECT_EQ(below.reqs.size(), 1u);
+  const LineTouch s0{0, 0b0001, 0};
+  EXPECT_EQ(cache.acquire(60, 0, std::span(&s0, 1)), 110u);
+  cache.release(0, std::span(&s0, 1));
+  ASSERT_EQ(below.reqs.size(), 2u);
+  EXPECT_FALSE(below.reqs[1].write);
+  EXPECT_EQ(below.reqs[1].addr, 0u);
+  EXPECT_EQ(below.reqs[1].bytes, 32u);
+  EXPECT_EQ(cache.stats().clear_fills, 3u);  // the first fill, tile 1's, and sector 1's
+}
+
+TEST(BlendArrayCacheLines, AnAccessGetsAllItsLinesOrNone) {
+  Recorder below;
+  BlendArrayCache cache(sectoredCache(16, 4, /*miss_queue=*/3), kSectored, 16, 0, below, false);
+  const LineTouch two[2] = {{0, 0b1111, 0}, {1, 0b1111, 0}};
+  const LineTouch three[3] = {{0, 0b1111, 0}, {1, 0b1111, 0}, {2, 0b1111, 0}};
+  // Two misses at 0 (entries busy until 50); a three-line access of another
+  // tile needs three entries: refused until the second busy one frees, at 50.
+  EXPECT_EQ(cache.acquire(0, 0, two), 50u);
+  EXPECT_EQ(cache.acquire(1, 1, three), kNever);
+  EXPECT_FALSE(cache.refusedBySet());
+  EXPECT_EQ(cache.missQueueFreesAt(), 50u);
+  EXPECT_EQ(cache.stats().accesses, 2u);  // nothing of the refused access counted
+  EXPECT_FALSE(cache.resident(1, 0));
+  EXPECT_EQ(cache.acquire(50, 1, three), 100u);
+  EXPECT_EQ(cache.stats().misses, 5u);
+  EXPECT_EQ(cache.linesInUse(), 5u);  // every line of both accesses is pinned
+  // Tile 0's lines are resident: hitting both costs no entry.
+  EXPECT_EQ(cache.acquire(60, 0, two), 70u);
+  EXPECT_FALSE(cache.release(0, two));
+  EXPECT_FALSE(cache.release(0, two));
+  EXPECT_EQ(cache.linesInUse(), 3u);
+}
+
+TEST(BlendArrayCacheLines, AnAccessNeverEvictsItsOwnLines) {
+  Recorder below;
+  // One set of 2 ways, 1 line per tile of 128 B.
+  BlendArrayCache cache(sectoredCache(2, 2), TileLines{128, 32, 2}, 8, 0, below, false);
+  const LineTouch a{0, 0b0001, 0};
+  ASSERT_NE(cache.acquire(0, 0, std::span(&a, 1)), kNever);  // tile 0 line 0 in way 0
+  cache.release(0, std::span(&a, 1));
+  // Tile 0, lines 0 (resident) and 1 (absent): the victim for line 1 must not
+  // be line 0 of this very access: it takes the free way.
+  const LineTouch both[2] = {{0, 0b0001, 0}, {1, 0b0001, 0}};
+  ASSERT_NE(cache.acquire(10, 0, both), kNever);
+  EXPECT_TRUE(cache.resident(0, 0));
+  EXPECT_TRUE(cache.resident(0, 1));
+  // Both pinned: tile 1's line 0 finds no way out of use.
+  EXPECT_EQ(cache.acquire(20, 1, std::span(&a, 1)), kNever);
+  EXPECT_TRUE(cache.refusedBySet());
+  EXPECT_EQ(cache.stats().set_in_use, 1u);
+  EXPECT_TRUE(cache.release(0, both));  // frees the refused set
+}
+
+TEST(BlendArrayCacheLines, MissesAreClassified) {
+  Recorder below;
+  // 2 lines direct mapped (2 sets of 1 way), one line per tile: tiles 0 and 2 share set 0.
+  BlendArrayCache cache(sectoredCache(2, 1), TileLines{128, 128, 1}, 8, 0, below, false, {}, /*classify=*/true);
+  Cycle now = 0;
+  for (uint32_t t : {0u, 2u, 0u, 1u, 3u, 2u}) {
+    const LineTouch r{0, 1, 0};
+    ASSERT_NE(cache.acquire(now += 100, t, std::span(&r, 1)), kNever);
+    cache.release(t, std::span(&r, 1));
+  }
+  // 0, 2: compulsory; 0: conflict (a 2-line fully associative cache still has
+  // it); 1, 3: compulsory; 2: capacity (neither holds it).
+  EXPECT_EQ(cache.stats().compulsory_misses, 4u);
+  EXPECT_EQ(cache.stats().conflict_misses, 1u);
+  EXPECT_EQ(cache.stats().capacity_misses, 1u);
+  EXPECT_EQ(cache.stats().misses, 6u);
+}
+
+TEST(BlendArrayCacheLines, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
+  Recorder below;
+  // 2 lines direct mapped (2 sets of 1 way), lines of 4 sectors, one line per tile.
+  BlendArrayCache cache(sectoredCache(2, 1), TileLines{128, 32, 1}, 8, 0, below, false, {}, /*classify=*/true);
+  Cycle now = 0;
+  const auto touch = [&](uint32_t tile, uint32_t sectors) {
+    const LineTouch r{0, sectors, 0};
+    ASSERT_NE(cache.acquire(now += 100, tile, std::span(&r, 1)), kNever);
+    cache.release(tile, std::span(&r, 1));
+  };
+  touch(0, 0b01);  // compulsory
+  touch(1, 0b01);  // compulsory (set 1)
+  touch(2, 0b01);  // compulsory: evicts tile 0 from set 0, and from the 2-line fully associative cache
+  touch(0, 0b10);  // compulsory (sector 1 never held)
+  // Tile 0 is back with sector 1 only, in both caches: sector 0 misses in
+  // both (capacity), though the fully associative cache holds the line.
+  touch(0, 0b01);
+  EXPECT_EQ(cache.stats().compulsory_misses, 4u);
+  EXPECT_EQ(cache.stats().capacity_misses, 1u);
+  EXPECT_EQ(cache.stats().conflict_misses, 0u);
+  // Tile 2 (sector 0) was evicted from set 0 but the fully associative cache
+  // still holds it: a conflict.
+  touch(2, 0b01);
+  EXPECT_EQ(cache.stats().conflict_misses, 1u);
+  EXPECT_EQ(cache.stats().misses, 6u);
+}
+
+TEST(BlendArrayCacheLines, StatsOfPartitionsAddUpAndThePeakIsTheLarger) {
+  CacheStats a, b;
+  a.accesses = 3, a.hits = 1, a.misses = 2, a.conflict_misses = 1, a.fill_bytes = 64, a.peak_misses_in_flight = 5;
+  b.accesses = 4, b.hits = 4, b.hits_under_miss = 2, b.write_bytes = 32, b.peak_misses_in_flight = 2;
+  a += b;
+  EXPECT_EQ(a.accesses, 7u);
+  EXPECT_EQ(a.hits, 5u);
+  EXPECT_EQ(a.misses, 2u);
+  EXPECT_EQ(a.conflict_misses, 1u);
+  EXPECT_EQ(a.hits_under_miss, 2u);
+  EXPECT_EQ(a.fill_bytes, 64u);
+  EXPECT_EQ(a.write_bytes, 32u);
+  EXPECT_EQ(a.peak_misses_in_flight, 5u);
+}
+
+TEST(BlendArrayCacheLines, DirtyRangesAtTheEndAreTheDirtySectors) {
+  Recorder below;
+  BlendArrayCache cache(sectoredCache(8, 2), kSectored, 16, 1 << 20, below, true);
+  const LineTouch w{3, 0b1001, 0b1001};  // sectors 0 and 3: two runs
+  ASSERT_NE(cache.acquire(0, 5, std::span(&w, 1)), kNever);
+  std::vector<DirtyRange> d;
+  cache.dirtyRanges(d);
+  ASSERT_EQ(d.size(), 2u);
+  const uint64_t line = (1 << 20) + (5 * 4 + 3) * 128;
+  EXPECT_EQ(d[0].addr, line);
+  EXPECT_EQ(d[0].bytes, 32u);
+  EXPECT_EQ(d[1].addr, line + 96);
+  EXPECT_TRUE(cache.touched(5));
+  EXPECT_FALSE(cache.touched(4));
 }
 
 }  // namespace

@@ -287,7 +287,7 @@ TEST_P(PixelLockTimingOn, FragmentsToOnePixelSerialiseAtTheBlendLatency) {
   ASSERT_LE(N, cfg.lock.capacity);
   ASSERT_EQ(cfg.input.fragments_per_clock, 2.0);
   // alpha: one accumulator "row"; each insert is Stored: 1 row.
-  const uint64_t L = cfg.cache.hit_latency + cfg.alu.base_latency + cfg.alu.row_latency * 1;
+  const uint64_t L = cfg.cache.hit_latency + cfg.alu.base_latency + cfg.alu.cycles_per_row_moved * 1;  // alpha: one accumulator written, no compare
   ASSERT_EQ(L, 20u);
   uint64_t wait = 0;
   for (uint64_t i = 1; i < N; ++i) wait += 45 + (i - 1) * L - (i / 2 + 24);
@@ -326,27 +326,28 @@ TEST_P(PixelLockTimingOn, DistinctPixelsRunAtTheInputRateWithoutLockWaits) {
 
 // The lock address follows lock.granularity. One 8x8 tile, one fragment per
 // pixel in raster order (64), one partition, fixed 20-cycle shader, input
-// 2/clk: fragment k issues at floor(k/2), reaches the lock at floor(k/2) + 24
-// (shader 20 + early depth 4) and, admitted at once, releases at
-// floor(k/2) + 45 (enter the cache 1 cycle later, hit 10, blend 8 + 2 x 1 row).
-// A waiter admitted at a release enters the cache in that cycle and holds the
-// lock H = hit 10 + base 8 + row 2 = 20 cycles.
+// 2/clk, mlab (k = 4) into empty arrays: each insert compares one row and
+// writes one (InsertWork {1, 1}). Fragment k issues at floor(k/2), reaches the
+// lock at floor(k/2) + 24 (shader 20 + early depth 4) and, admitted at once,
+// releases at floor(k/2) + 46 (enter the cache 1 cycle later, hit 10, blend
+// 8 + 1 compare + 2 x 1 row). A waiter admitted at a release enters the cache
+// in that cycle and holds the lock H = hit 10 + 8 + 1 + 2 = 21 cycles.
 //  - pixel: no two fragments share an address: 0 conflicts; the pass ends with
-//    the last release, 31 + 45 = 76.
+//    the last release, 31 + 46 = 77.
 //  - quad: 16 quads of 4; (x, y) and (x+1, y) issue together, the row below
 //    4 cycles later, all within the first one's hold: 3 conflicts per quad, 48;
-//    a quad issued at c releases at c + 45, 65, 85, 105; the last quad's first
-//    fragment (6, 6) issues at 27: the pass ends at 27 + 105 = 132. Waits per
-//    quad: 45 - 24, 65 - 28, 85 - 28 = 21 + 37 + 57.
+//    a quad issued at c releases at c + 46, 67, 88, 109; the last quad's first
+//    fragment (6, 6) issues at 27: the pass ends at 27 + 109 = 136. Waits per
+//    quad: 46 - 24, 67 - 28, 88 - 28 = 22 + 39 + 60.
 //  - tile: every fragment but the first waits: 63 conflicts; releases at
-//    45 + 20 j for the j-th; the pass ends at 45 + 63 x 20 = 1305; fragment k
-//    (k >= 1) waits from floor(k/2) + 24 to 45 + 20 (k - 1).
+//    46 + 21 j for the j-th; the pass ends at 46 + 63 x 21 = 1369; fragment k
+//    (k >= 1) waits from floor(k/2) + 24 to 46 + 21 (k - 1).
 // Each fragment is its own primitive here. When all 64 are one primitive,
 // lock.per_primitive lets them hold the quad/tile lock together: the pixel
 // case's figures at every granularity; without it, the figures above again.
-// The approximate engine gives these figures except in the quad cases with
-// waits: it hands out blend slots in visit order, so the quads after a waiter
-// queue behind its late blend (pass 685, waits 14,792; DESIGN.md).
+// The approximate engine gives these figures too (since it hands out blend
+// slots by time; in visit order the quads after a waiter queued behind its
+// late blend: pass 685, waits 14,792; DESIGN.md).
 TEST_P(PixelLockTimingOn, GranularitySetsTheLockAddressOfOneTile) {
   std::vector<Fragment> fs, one_prim;
   for (uint16_t y = 0; y < 8; ++y)
@@ -358,25 +359,25 @@ TEST_P(PixelLockTimingOn, GranularitySetsTheLockAddressOfOneTile) {
   ASSERT_EQ(base.partitions.tile_width, 8u);
   ASSERT_EQ(base.partitions.tile_height, 8u);
   ASSERT_EQ(base.input.fragments_per_clock, 2.0);
-  const uint64_t H = base.cache.hit_latency + base.alu.base_latency + base.alu.row_latency * 1;
-  ASSERT_EQ(H, 20u);
+  const uint64_t H =
+      base.cache.hit_latency + base.alu.base_latency + base.alu.cycles_per_compare + base.alu.cycles_per_row_moved;
+  ASSERT_EQ(H, 21u);
   uint64_t tile_wait = 0;
-  for (uint64_t k = 1; k < 64; ++k) tile_wait += 45 + H * (k - 1) - (k / 2 + 24);
+  for (uint64_t k = 1; k < 64; ++k) tile_wait += 46 + H * (k - 1) - (k / 2 + 24);
   struct Case {
     LockGranularity g;
     bool one_primitive, per_primitive;
     uint64_t conflicts, pass, wait;
   };
-  const uint64_t quad_wait = 16 * (21 + 37 + 57);
-  for (const Case& c : {Case{LockGranularity::Pixel, false, true, 0, 76, 0},
-                        Case{LockGranularity::Quad, false, true, 48, 132, quad_wait},
-                        Case{LockGranularity::Tile, false, true, 63, 45 + 63 * H, tile_wait},
-                        Case{LockGranularity::Pixel, true, true, 0, 76, 0},
-                        Case{LockGranularity::Quad, true, true, 0, 76, 0},
-                        Case{LockGranularity::Tile, true, true, 0, 76, 0},
-                        Case{LockGranularity::Quad, true, false, 48, 132, quad_wait},
-                        Case{LockGranularity::Tile, true, false, 63, 45 + 63 * H, tile_wait}}) {
-    if (GetParam() == SimEngine::Approximate && c.conflicts != 0 && c.g == LockGranularity::Quad) continue;
+  const uint64_t quad_wait = 16 * (22 + 39 + 60);
+  for (const Case& c : {Case{LockGranularity::Pixel, false, true, 0, 77, 0},
+                        Case{LockGranularity::Quad, false, true, 48, 136, quad_wait},
+                        Case{LockGranularity::Tile, false, true, 63, 46 + 63 * H, tile_wait},
+                        Case{LockGranularity::Pixel, true, true, 0, 77, 0},
+                        Case{LockGranularity::Quad, true, true, 0, 77, 0},
+                        Case{LockGranularity::Tile, true, true, 0, 77, 0},
+                        Case{LockGranularity::Quad, true, false, 48, 136, quad_wait},
+                        Case{LockGranularity::Tile, true, false, 63, 46 + 63 * H, tile_wait}}) {
     SCOPED_TRACE(::testing::Message() << "granularity " << int(c.g) << " one primitive " << c.one_primitive
                                       << " per_primitive " << c.per_primitive);
     RopConfig cfg = base;

@@ -1,0 +1,130 @@
+// Root-cause attribution of a partition's cycles (DESIGN.md "Root causes"):
+// every cycle a partition runs is charged to exactly one cause, the resource
+// that held the pipeline back in that cycle. A stage blocked by back-pressure
+// takes the cause of whatever blocks it, recursively, down to a resource: the
+// input rate, the blend ALU, the ordered lock, the memory a waited-for line or
+// tile comes from (split into DRAM queueing, DRAM's unloaded access and the
+// cache's own latency), the scoreboard, the front end. The per-stage accounts
+// (TimingStats.hpp) stay beside it: they say where fragments wait, this says why.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "oit_rop/Types.hpp"
+
+namespace oit::rop {
+
+enum class RootCause : uint8_t {
+  Input,            // the input rate: the pipeline keeps up with the fragments the shader hands it
+  InputStarvation,  // the front end has no fragment for this partition (another partition's backlog holds it)
+  ScoreboardFull,   // every scoreboard entry held by fragments in fixed latencies (shader, depth, hit, blend)
+  LockWait,         // fragments wait for older ones of their lock address (the ordered interlock)
+  Alu,              // the blend ALU at its rate (transparent passes and the resolve)
+  RopCacheMiss,     // the ROP cache's own latency on a miss (what is left of the wait beyond DRAM)
+  L2,               // the shared L2 / L3 levels
+  DramLatency,      // DRAM's unloaded access (controller, activate, CL, the bursts on an idle channel)
+  DramBandwidth,    // DRAM queueing: the wait beyond the unloaded access (busy bus, banks, write queue)
+  PipelineLatency,  // a pass's tail: fragments in fixed latencies with nothing behind them to overlap
+  Atomics,          // "atomic_wait": the A-buffer's global node counter (issue 22, items 1-3; the stall cause's name)
+  ListWalk,         // the A-buffer resolve's dependent node reads
+  Sort,             // the A-buffer resolve's sort
+};
+inline constexpr unsigned kRootCauseCount = 13;
+const char* rootCauseKey(RootCause c);  // "input", "input_starvation", ... (report keys)
+
+// A memory wait as the cycles it passes through, in order: up to latency_end
+// DRAM's unloaded access to the request's first data (its activate and CL go
+// on while the bus still moves older data), up to queue_end the queueing (for
+// the bus, mostly), up to dram_end the rest of its data at the bus's rate
+// (queueing and transfer are bandwidth), after that `rest` (the cache's own
+// latency). A stage that waits only for the tail of a wait (an older fragment
+// waited for the front) is charged for that tail.
+struct WaitSplit {
+  Cycle latency_end = 0, queue_end = 0, dram_end = 0;
+  RootCause rest = RootCause::RopCacheMiss;
+  bool operator==(const WaitSplit&) const = default;
+};
+
+// The DRAM side of the requests made since MemorySystem::resetProbe(): the
+// one that completed last, done at `done`; an idle controller takes
+// `unloaded` cycles to its first data and `transfer` more for the rest of it.
+// `done` = 0: no DRAM request.
+struct DramProbe {
+  Cycle done = 0, unloaded = 0, transfer = 0;
+};
+
+// The split of a wait from `now` to `ready` whose DRAM part is `d` (the
+// request that completed last): the unloaded access first, then the
+// queueing, the transfer of the rest of its data, the rest `rest`.
+WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest = RootCause::RopCacheMiss);
+
+// The share of the DRAM buses busy over [from, to) (MemorySystem::busShare):
+// the part of a wait's unloaded access during which the buses moved other
+// data is charged to bandwidth (a shorter latency would not have shortened
+// the frame then; a faster bus would). Empty: all latency.
+using BusShareFn = std::function<double(Cycle, Cycle)>;
+
+// Splits `n` cycles of unloaded access over [from, to) into latency and bandwidth.
+void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth);
+
+// One partition's cycles by root cause, accounted lazily: a cause holds from
+// set() until the next set() with another one (as the stage accounts).
+class RootCauseAccount {
+ public:
+  using Cycles = std::array<uint64_t, kRootCauseCount>;
+  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
+  void set(Cycle now, RootCause c) {
+    if (!wait_ && c == cause_) return;
+    account(now);
+    cause_ = c;
+    wait_ = false;
+  }
+  void setWait(Cycle now, const WaitSplit& w) {
+    if (wait_ && w == w_) return;
+    account(now);
+    w_ = w;
+    wait_ = true;
+  }
+  // Accounts the current cause up to `now` (it keeps holding).
+  void account(Cycle now);
+  // Adds `n` cycles to cause c directly (the approximate engine's spans).
+  void add(RootCause c, uint64_t n) { cycles_[std::size_t(c)] += n; }
+  // Moves the accounting cursor to `now` without charging (cycles another
+  // mechanism charged with add()).
+  void skipTo(Cycle now) { since_ = now; }
+  const Cycles& cycles() const { return cycles_; }
+  uint64_t total() const;
+
+ private:
+  Cycles cycles_{};
+  BusShareFn bus_;
+  RootCause cause_ = RootCause::Input;
+  bool wait_ = false;
+  WaitSplit w_;
+  Cycle since_ = 0;
+};
+
+// The approximate engine's coarse attribution of a wait it cannot place in
+// time (a full scoreboard, a pass's drain): the delays the fragments in
+// flight met since the last such wait, by cause, share it out in proportion
+// (largest remainders; all zero: `fallback`).
+class DelayShares {
+ public:
+  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
+  void add(RootCause c, uint64_t cycles) { delay_[std::size_t(c)] += cycles; }
+  void addWait(Cycle from, Cycle to, const WaitSplit& w);  // [from, to) split as the WaitSplit says
+  // `n` cycles in the proportions of w's parts over [from, to) (a hit that
+  // waits for another fragment's fill: that fill's proportions).
+  void addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w);
+  // Charges `n` cycles to `acc` in proportion to the delays gathered, then forgets them.
+  void chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback);
+
+ private:
+  RootCauseAccount::Cycles delay_{};
+  BusShareFn bus_;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,75 @@
+#include "oit_rop/memory/DramTimings.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace oit::rop {
+
+namespace {
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(std::string("DramConfig: ") + what);
+}
+}  // namespace
+
+uint64_t DramTimings::ticks(double cycles) {
+  const double t = std::ldexp(cycles, static_cast<int>(kTickShift));
+  const double r = std::round(t);
+  if (std::fabs(t - r) <= 1e-9 * std::max(1.0, r)) return static_cast<uint64_t>(r);
+  return static_cast<uint64_t>(std::ceil(t));
+}
+
+DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
+  require(core_mhz > 0, "core_mhz must be > 0");
+  require(cfg.channels >= 1, "channels must be >= 1");
+  require(cfg.channel_gbps > 0, "channel_gbps must be > 0");
+  require(cfg.tck_ns > 0, "tck_ns must be > 0");
+  require(cfg.controller_ns >= 0, "controller_ns must be >= 0");
+  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
+  const double cycles_per_ns = core_mhz / 1000.0;
+  const auto tck = [&](unsigned n) { return ticks(n * cfg.tck_ns * cycles_per_ns); };
+  // GB/s / (cycles/s): channel_gbps * 1e9 / (core_mhz * 1e6)
+  bytes_per_cycle = cfg.channel_gbps * 1000.0 / core_mhz;
+  ctrl = ticks(cfg.controller_ns * cycles_per_ns);
+  cl = tck(cfg.cl);
+  trcd = tck(cfg.trcd);
+  trp = tck(cfg.trp);
+  tras = tck(cfg.tras);
+  twtr = tck(cfg.twtr);
+  trtw = tck(cfg.trtw);
+  const double burst_cycles = cfg.burst_bytes / bytes_per_cycle;
+  // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
+  require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
+  burst = ticks(burst_cycles);
+  require(burst >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
+  if (cfg.trefi_ns > 0) {
+    const std::string problem = refreshProblem(cfg, core_mhz);
+    require(problem.empty(), problem.c_str());
+    refresh_period = ticks(cfg.trefi_ns * cycles_per_ns);
+    refresh_rfc = ticks(cfg.trfc_ns * cycles_per_ns);
+    for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);
+    max_run_bursts = (refresh_period - refresh_rfc - trcd - cl) / burst;  // >= 1: refreshProblem
+  }
+}
+
+std::string DramTimings::refreshProblem(const DramConfig& cfg, double core_mhz) {
+  if (cfg.trefi_ns == 0) return {};
+  if (!(cfg.trefi_ns > 0) || !(cfg.trfc_ns > 0) || !(cfg.tck_ns > 0) || !(cfg.channel_gbps > 0) || !(core_mhz > 0))
+    return "dram.trefi_ns > 0 needs dram.trfc_ns > 0 (and a valid clock, tCK and bandwidth)";
+  // A run of bursts is placed whole between two refreshes, on a bank the
+  // refresh left closed (MEMORY.md); longer runs are booked in parts, but one
+  // burst must fit.
+  const double cycles_per_ns = core_mhz / 1000.0;
+  const auto ns = [&](double v) { return ticks(v * cycles_per_ns); };
+  const uint64_t cl = ns(cfg.cl * cfg.tck_ns), trcd = ns(cfg.trcd * cfg.tck_ns);
+  const uint64_t burst = ns(cfg.burst_bytes / cfg.channel_gbps);  // bytes / (GB/s) = ns
+  const uint64_t run = trcd + cl + burst;
+  const uint64_t period = ns(cfg.trefi_ns), rfc = ns(cfg.trfc_ns);
+  if (rfc < period && period - rfc >= run) return {};
+  return fmt::format(
+      "dram.trefi_ns ({} ns) minus dram.trfc_ns ({} ns) must hold an activate, CL and one burst of {} bytes "
+      "({:.1f} ns here)",
+      cfg.trefi_ns, cfg.trfc_ns, cfg.burst_bytes, cycles(run) / cycles_per_ns);
+}
+
+}  // namespace oit::rop

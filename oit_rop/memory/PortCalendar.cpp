@@ -1,0 +1,97 @@
+// A port's capacity per cycle, booked earliest-free-first (PortCalendar.hpp).
+#include "oit_rop/memory/PortCalendar.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <stdexcept>
+
+namespace oit::rop {
+
+PortCalendar::PortCalendar(double bytes_per_clock, Cycle lookback) : lookback_(lookback) {
+  if (!(bytes_per_clock > 0)) throw std::invalid_argument("PortCalendar: bytes_per_clock must be > 0");
+  // Parts of a cycle per byte, times 2^16: a 64-byte transfer at 43.5 B/clock
+  // is 64 x 1506.6 parts, rounded up once per request (never faster than configured).
+  parts_per_byte_ = uint64_t(std::ceil(std::ldexp(double(kFull), 16) / bytes_per_clock));
+  const size_t size = std::max<size_t>(1024, std::bit_ceil(size_t(2 * lookback + 64)));
+  used_.assign(size, 0);
+  full_.assign(size / 64, 0);
+  mask_ = size - 1;
+}
+
+uint32_t PortCalendar::used(Cycle c) const {
+  if (c < base_ || c > base_ + mask_) return 0;
+  return used_[c & mask_];
+}
+
+void PortCalendar::advanceBase(Cycle base) {
+  if (base <= base_) return;
+  // The cycles [base_, base) leave the ring: their slots become free for the
+  // cycles one ring further on.
+  if (base - base_ > mask_) {
+    std::fill(used_.begin(), used_.end(), 0);
+    std::fill(full_.begin(), full_.end(), 0);
+  } else {
+    for (Cycle c = base_; c < base; ++c) {
+      used_[c & mask_] = 0;
+      full_[(c & mask_) >> 6] &= ~(uint64_t(1) << (c & 63));
+    }
+  }
+  base_ = base;
+}
+
+void PortCalendar::reserve(Cycle last) {
+  if (last <= base_ + mask_) return;
+  // Grow the ring (doubling) so that it covers [base_, last]; lay the
+  // bookings out again at their cycles.
+  size_t size = used_.size();
+  while (base_ + size - 1 < last) size *= 2;
+  std::vector<uint32_t> used(size, 0);
+  std::vector<uint64_t> full_bits(size / 64, 0);
+  const uint64_t mask = size - 1;
+  for (Cycle c = base_; c <= base_ + mask_; ++c) {
+    used[c & mask] = used_[c & mask_];
+    if (full(c)) full_bits[(c & mask) >> 6] |= uint64_t(1) << (c & 63);
+  }
+  used_.swap(used);
+  full_.swap(full_bits);
+  mask_ = mask;
+}
+
+void PortCalendar::book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end) {
+  if (now > latest_) {
+    latest_ = now;
+    if (lookback_ != 0 && latest_ > lookback_) advanceBase(latest_ - lookback_);
+  }
+  Cycle c = std::max(now, base_);
+  uint64_t need = (uint64_t(bytes) * parts_per_byte_ + 0xFFFF) >> 16;  // parts of a cycle
+  if (need == 0) {
+    start = end = c;
+    return;
+  }
+  bool started = false;
+  for (;;) {
+    reserve(c);
+    // Skip full cycles, a bitmap word (64 cycles) at a time where possible.
+    if (full(c)) {
+      const uint64_t word = full_[(c & mask_) >> 6] >> (c & 63);
+      const unsigned run = word == ~uint64_t(0) >> (c & 63) ? 64 - unsigned(c & 63) : unsigned(std::countr_one(word));
+      c += run;
+      continue;
+    }
+    uint32_t& u = slot(c);
+    const uint64_t take = std::min<uint64_t>(kFull - u, need);
+    if (!started) {
+      start = c;
+      started = true;
+    }
+    u += uint32_t(take);
+    if (u == kFull) setFull(c);
+    need -= take;
+    ++c;
+    if (need == 0) break;
+  }
+  end = c;
+}
+
+}  // namespace oit::rop

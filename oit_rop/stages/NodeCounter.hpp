@@ -1,0 +1,65 @@
+// NodeCounter: the A-buffer's global node counter (Yang et al. 2010), one for
+// the whole GPU: every stored fragment takes one atomic increment, and the
+// L2's atomic unit serves abuffer.atomics_per_clock of them per clock for all
+// partitions together, so its contention is part of the insert's cost.
+// Partitions run up to a quantum apart, so a booking may come for a cycle
+// before bookings already made: each cycle's capacity is booked
+// earliest-free-first over a window of cycles (a calendar), not in call
+// order, and a partition behind fills the gaps the others left.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "oit_rop/stages/PipelineQueues.hpp"
+
+namespace oit::rop {
+
+class NodeCounter {
+ public:
+  NodeCounter(double atomics_per_clock, unsigned latency)
+      : cap_(int64_t(atomics_per_clock * kOne + 0.5)), latency_(latency), ring_(kWindow, 0) {
+    if (!(atomics_per_clock > 0) || cap_ < 1) throw std::invalid_argument("abuffer.atomics_per_clock must be > 0");
+  }
+  // One increment asked at cycle `at`: the cycle its index returns (served
+  // at the first cycle from `at` with capacity left, plus the latency).
+  Cycle grant(Cycle at) {
+    retireBefore(at > kWindow / 2 ? at - kWindow / 2 : 0);
+    Cycle c = std::max(at, base_);
+    int64_t need = kOne;  // one atomic = kOne units of a cycle's capacity cap_
+    for (;; ++c) {
+      if (c >= base_ + kWindow) retireBefore(c - kWindow / 2);
+      int64_t& used = ring_[c % kWindow];
+      const int64_t take = std::min(need, cap_ - used);
+      if (take > 0) {
+        used += take;
+        need -= take;
+        if (need == 0) break;
+      }
+    }
+    ++atomics_;
+    waited_ += c - at;
+    return c + latency_;
+  }
+  uint64_t atomics() const { return atomics_; }
+  uint64_t waitCycles() const { return waited_; }  // cycles the increments waited for capacity
+
+ private:
+  static constexpr int64_t kOne = int64_t(1) << 20;
+  static constexpr Cycle kWindow = 1u << 14;  // cycles of bookings kept (well over a quantum)
+  void retireBefore(Cycle c) {
+    if (c <= base_) return;
+    const Cycle end = std::min(c, base_ + kWindow);
+    for (Cycle i = base_; i < end; ++i) ring_[i % kWindow] = 0;
+    base_ = c;
+  }
+  int64_t cap_;
+  unsigned latency_;
+  std::vector<int64_t> ring_;
+  Cycle base_ = 0;
+  uint64_t atomics_ = 0, waited_ = 0;
+};
+
+}  // namespace oit::rop

@@ -1,0 +1,245 @@
+// The shared cache level (l2 / l3): hit and miss latency, the slice ports'
+// bandwidth, LRU and write-back, sectors, write-allocate, the victim-only
+// mode, the miss classes and the dirty bytes left at the end. Expected values
+// are derived by hand in the comments.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "oit_rop/memory/CacheLevel.hpp"
+
+using namespace oit::rop;
+
+namespace {
+
+// The level below: a fixed latency, every request recorded.
+struct FakeBelow : MemoryPort {
+  struct Req {
+    Cycle now;
+    uint64_t addr;
+    uint32_t bytes;
+    bool write;
+  };
+  Cycle latency = 100;
+  std::vector<Req> reqs;
+  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface) override {
+    reqs.push_back({now, addr, bytes, write});
+    return now + latency;
+  }
+  uint64_t bytes(bool write) const {
+    uint64_t n = 0;
+    for (const Req& r : reqs) n += r.write == write ? r.bytes : 0;
+    return n;
+  }
+};
+
+SharedCacheConfig small(uint64_t size, unsigned ways, unsigned line = 64, unsigned slices = 1) {
+  SharedCacheConfig c;
+  c.size_bytes = size;
+  c.ways = ways;
+  c.line_bytes = line;
+  c.slices = slices;
+  c.hit_latency = 20;
+  c.bytes_per_clock = 16;
+  return c;
+}
+
+}  // namespace
+
+TEST(CacheLevel, MissThenHitLatency) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(4096, 4), 1000, below);
+  // Miss at 0: the port moves 64 B in 4 cycles (16 B/clock) from 0, the lookup
+  // takes 20, then the fill 100: ready at 120.
+  EXPECT_EQ(l2.access(0, 0, 64, false, Surface::BlendArrays), 120u);
+  ASSERT_EQ(below.reqs.size(), 1u);
+  EXPECT_EQ(below.reqs[0].now, 20u);
+  EXPECT_EQ(below.reqs[0].bytes, 64u);
+  // Hit at 200: 200 + 20.
+  EXPECT_EQ(l2.access(200, 0, 64, false, Surface::BlendArrays), 220u);
+  EXPECT_EQ(l2.stats().hits[0], 1u);
+  EXPECT_EQ(l2.stats().misses[0], 1u);
+  // A hit on a line whose fill is still in flight waits for that fill.
+  EXPECT_EQ(l2.access(300, 64, 64, false, Surface::Depth), 420u);
+  EXPECT_EQ(l2.access(301, 64, 64, false, Surface::Depth), 420u);
+}
+
+namespace {
+// Lines 0..15 read at cycle 0 (warm), then all read again at t0: when the
+// last of these 16 hits is there.
+Cycle lastOfSixteenHits(CacheLevel& l2, Cycle t0) {
+  for (uint64_t a = 0; a < 1024; a += 64) l2.access(0, a, 64, false, Surface::BlendArrays);
+  Cycle last = 0;
+  for (uint64_t a = 0; a < 1024; a += 64) last = std::max(last, l2.access(t0, a, 64, false, Surface::BlendArrays));
+  return last;
+}
+}  // namespace
+
+TEST(CacheLevel, OneSlicePortMovesBytesPerClock) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(4096, 4), 1000, below);
+  // 16 hits of 64 B requested at t0 on one 16 B/clock port: transfers start
+  // at t0, t0 + 4, ..., t0 + 60; the last is there at t0 + 60 + 20 = t0 + 80,
+  // i.e. 1024 B / 16 B per clock + the hit latency - one transfer (4).
+  EXPECT_EQ(lastOfSixteenHits(l2, 10000), 10000u + 80);
+}
+
+TEST(CacheLevel, SlicesServeInParallel) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(4 * 4096, 4, 64, 4), 1000, below);
+  // Consecutive lines walk the 4 slices (lines 0..15: no bits from 12 up, so
+  // slice = line mod 4): 4 lines per slice, the last transfer of each starts
+  // at t0 + 12, data at t0 + 32.
+  std::vector<unsigned> per_slice(4, 0);
+  for (uint64_t a = 0; a < 1024; a += 64) ++per_slice[l2.sliceOf(a)];
+  EXPECT_EQ(per_slice, (std::vector<unsigned>{4, 4, 4, 4}));
+  EXPECT_EQ(lastOfSixteenHits(l2, 10000), 10000u + 32);
+}
+
+TEST(CacheLevel, LeastRecentlyUsedDirtyVictimIsWrittenBack) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(128, 2), 1000, below);  // one set of 2 ways
+  l2.access(0, 0, 64, true, Surface::Colour);      // A dirty (write-allocate, whole sector: no fetch)
+  l2.access(10, 64, 64, false, Surface::Depth);    // B clean (a fill)
+  l2.access(20, 0, 64, false, Surface::Colour);    // A hit: B is now the LRU
+  l2.access(30, 128, 64, false, Surface::Depth);   // C evicts B (clean: no write)
+  EXPECT_EQ(below.bytes(true), 0u);
+  l2.access(40, 192, 64, false, Surface::Depth);   // D evicts A (dirty: 64 B written back)
+  EXPECT_EQ(below.bytes(true), 64u);
+  EXPECT_EQ(l2.stats().writebacks[unsigned(Surface::Colour)], 1u);
+  EXPECT_EQ(l2.stats().writeback_bytes[unsigned(Surface::Colour)], 64u);
+  EXPECT_FALSE(l2.resident(0));
+  EXPECT_TRUE(l2.resident(128));
+}
+
+TEST(CacheLevel, SectorsFillAndWriteBackOnlyWhatIsNeeded) {
+  FakeBelow below;
+  SharedCacheConfig c = small(1024, 2, 128);
+  c.sector_bytes = 32;
+  CacheLevel l2("l2", c, 1000, below);
+  l2.access(0, 32, 32, false, Surface::BlendArrays);  // sector 1: a 32 B fill
+  ASSERT_EQ(below.reqs.size(), 1u);
+  EXPECT_EQ(below.reqs[0].addr, 32u);
+  EXPECT_EQ(below.reqs[0].bytes, 32u);
+  l2.access(200, 32, 32, false, Surface::BlendArrays);  // hit
+  l2.access(300, 64, 64, false, Surface::BlendArrays);  // sectors 2 and 3: one 64 B fill (a sector miss)
+  ASSERT_EQ(below.reqs.size(), 2u);
+  EXPECT_EQ(below.reqs[1].addr, 64u);
+  EXPECT_EQ(below.reqs[1].bytes, 64u);
+  EXPECT_EQ(l2.stats().misses[0], 2u);
+  // A whole-sector write needs no fetch; a partial one fetches its sector.
+  l2.access(400, 1024, 32, true, Surface::BlendArrays);
+  EXPECT_EQ(below.reqs.size(), 2u);
+  l2.access(500, 1024 + 40, 8, true, Surface::BlendArrays);
+  ASSERT_EQ(below.reqs.size(), 3u);
+  EXPECT_EQ(below.reqs[2].addr, 1024u + 32);
+  EXPECT_EQ(below.reqs[2].bytes, 32u);
+  // The dirty bytes left: sectors 0 and 1 of the line at 1024, one run.
+  std::vector<DirtyRange> dirty;
+  l2.dirtyRanges(dirty);
+  ASSERT_EQ(dirty.size(), 1u);
+  EXPECT_EQ(dirty[0].addr, 1024u);
+  EXPECT_EQ(dirty[0].bytes, 64u);
+}
+
+TEST(CacheLevel, VictimLevelTakesEveryEvictionAndDoesNotAllocateOnReadMisses) {
+  FakeBelow dram;
+  SharedCacheConfig c3 = small(4096, 4);
+  c3.victim_only = true;
+  CacheLevel l3("l3", c3, 1000, dram);
+  CacheLevel l2("l2", small(128, 2), 1000, l3, &l3);  // one set of 2 ways
+  l2.access(0, 0, 64, false, Surface::BlendArrays);   // A: misses both, from DRAM; l3 keeps nothing
+  EXPECT_FALSE(l3.resident(0));
+  EXPECT_EQ(dram.reqs.size(), 1u);
+  l2.access(10, 64, 64, true, Surface::BlendArrays);   // B dirty
+  l2.access(20, 128, 64, false, Surface::BlendArrays); // C evicts A (clean) into l3
+  EXPECT_TRUE(l3.resident(0));
+  EXPECT_EQ(l3.stats().victims_in, 1u);
+  l2.access(30, 192, 64, false, Surface::BlendArrays); // D evicts B (dirty) into l3: nothing reaches DRAM yet
+  EXPECT_EQ(dram.bytes(true), 0u);
+  const size_t dram_reads = dram.reqs.size();
+  // A again: an l3 hit, no DRAM access; 20 (l2 lookup) + 20 (l3 lookup) = 40 after the request.
+  EXPECT_EQ(l2.access(1000, 0, 64, false, Surface::BlendArrays), 1040u);
+  EXPECT_EQ(dram.reqs.size(), dram_reads);
+  std::vector<DirtyRange> dirty;
+  l3.dirtyRanges(dirty);
+  ASSERT_EQ(dirty.size(), 1u);
+  EXPECT_EQ(dirty[0].addr, 64u);
+}
+
+TEST(CacheLevel, MissesAreClassifiedCompulsoryCapacityConflict) {
+  FakeBelow below;
+  // Two sets of one way (direct mapped), 2 lines: lines 0 and 2 share set 0.
+  CacheLevel l2("l2", small(128, 1), 1000, below);
+  Cycle t = 0;
+  const auto read = [&](uint64_t line) { l2.access(t += 200, line * 64, 64, false, Surface::BlendArrays); };
+  read(0);  // compulsory
+  read(2);  // compulsory (evicts 0)
+  read(0);  // conflict: a 2-line fully associative cache still holds 0
+  EXPECT_EQ(l2.stats().compulsory_misses, 2u);
+  EXPECT_EQ(l2.stats().conflict_misses, 1u);
+  read(1);  // compulsory
+  read(3);  // compulsory; the fully associative cache now holds 1 and 3
+  read(2);  // capacity: neither cache holds 2
+  EXPECT_EQ(l2.stats().compulsory_misses, 4u);
+  EXPECT_EQ(l2.stats().capacity_misses, 1u);
+  EXPECT_EQ(l2.stats().misses[0], 6u);
+}
+
+// stats.level_miss_classes off: the same accesses, hits, misses, bytes and
+// cycles, and no split (all three causes 0, classifiesMisses false).
+TEST(CacheLevel, WithoutClassificationOnlyTheSplitIsMissing) {
+  FakeBelow below_on, below_off;
+  CacheLevel on("l2", small(128, 1), 1000, below_on, nullptr, true);
+  CacheLevel off("l2", small(128, 1), 1000, below_off, nullptr, false);
+  EXPECT_TRUE(on.classifiesMisses());
+  EXPECT_FALSE(off.classifiesMisses());
+  Cycle t = 0;
+  for (uint64_t line : {0, 2, 0, 1, 3, 2, 2}) {  // the sequence above, and a hit
+    t += 200;
+    const bool write = line == 1;
+    EXPECT_EQ(on.access(t, line * 64, 64, write, Surface::BlendArrays),
+              off.access(t, line * 64, 64, write, Surface::BlendArrays));
+  }
+  EXPECT_EQ(on.stats().misses[0], 6u);
+  EXPECT_EQ(off.stats().misses[0], 6u);
+  EXPECT_EQ(off.stats().hits[0], 1u);
+  EXPECT_EQ(on.stats().fill_bytes, off.stats().fill_bytes);
+  EXPECT_EQ(on.stats().writeback_bytes, off.stats().writeback_bytes);
+  EXPECT_EQ(on.stats().compulsory_misses + on.stats().capacity_misses + on.stats().conflict_misses, 6u);
+  EXPECT_EQ(off.stats().compulsory_misses + off.stats().capacity_misses + off.stats().conflict_misses, 0u);
+  EXPECT_EQ(below_on.reqs.size(), below_off.reqs.size());
+}
+
+TEST(CacheLevel, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
+  FakeBelow below;
+  // Two sets of one way, 64-byte lines of 16-byte sectors: lines 0 and 2 share set 0.
+  SharedCacheConfig c = small(128, 1);
+  c.sector_bytes = 16;
+  CacheLevel l2("l2", c, 1000, below);
+  Cycle t = 0;
+  const auto read = [&](uint64_t line, uint32_t sector) {
+    l2.access(t += 200, line * 64 + sector * 16, 16, false, Surface::BlendArrays);
+  };
+  read(0, 0);  // compulsory
+  read(1, 0);  // compulsory
+  read(2, 0);  // compulsory; evicts 0 in both caches (the fully associative one's LRU is 0)
+  read(0, 1);  // compulsory (sector 1 never held); 0 is back with sector 1 in both
+  read(0, 0);  // capacity: neither holds sector 0 of line 0
+  EXPECT_EQ(l2.stats().compulsory_misses, 4u);
+  EXPECT_EQ(l2.stats().capacity_misses, 1u);
+  EXPECT_EQ(l2.stats().conflict_misses, 0u);
+  read(2, 0);  // conflict: evicted from set 0, still in the fully associative cache
+  EXPECT_EQ(l2.stats().conflict_misses, 1u);
+}
+
+TEST(CacheLevel, RejectsBadGeometry) {
+  FakeBelow below;
+  EXPECT_THROW(CacheLevel("l2", small(1000, 4), 1000, below), std::invalid_argument);  // not whole sets
+  SharedCacheConfig c = small(4096, 4);
+  c.sector_bytes = 48;
+  EXPECT_THROW(CacheLevel("l2", c, 1000, below), std::invalid_argument);
+  c = small(4096, 4);
+  c.bytes_per_clock = 0;
+  EXPECT_THROW(CacheLevel("l2", c, 1000, below), std::invalid_argument);
+}

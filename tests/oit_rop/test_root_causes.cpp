@@ -1,0 +1,136 @@
+// Root-cause attribution (oit_rop/RootCause.hpp, DESIGN.md "Root causes"):
+// the accounts and the DRAM split derived by hand. (The roofline
+// microbenchmarks, tests/oit_rop/test_bounds.cpp, check that each reports the
+// resource it stresses as timing.bound_by with at least 90 % of the cycles.)
+#include <gtest/gtest.h>
+
+#include "oit_rop/RootCause.hpp"
+#include "oit_rop/memory/DramTestConfig.hpp"
+#include "oit_rop/memory/MemorySystem.hpp"
+
+using namespace oit;
+using namespace oit::rop;
+using namespace oit::rop::testutil;
+
+namespace {
+
+uint64_t at(const RootCauseAccount& a, RootCause c) { return a.cycles()[size_t(c)]; }
+
+// A wait from 4 to 20 whose DRAM unloaded access ends at 10 and queueing at
+// 15: 6 cycles of latency, 5 of bandwidth, 5 of the cache's own; then the
+// ALU from 20 to 30.
+TEST(RootCauseAccount, AWaitIsChargedByItsParts) {
+  RootCauseAccount a;
+  a.set(0, RootCause::Input);
+  a.setWait(4, WaitSplit{10, 15, 15, RootCause::RopCacheMiss});
+  a.set(20, RootCause::Alu);
+  a.account(30);
+  EXPECT_EQ(at(a, RootCause::Input), 4u);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 6u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 5u);
+  EXPECT_EQ(at(a, RootCause::RopCacheMiss), 5u);
+  EXPECT_EQ(at(a, RootCause::Alu), 10u);
+  EXPECT_EQ(a.total(), 30u);
+  // Only the tail of a wait: from 12 on, 3 cycles of queueing, 2 of transfer
+  // (its further data: both bandwidth) and 3 of the L2.
+  RootCauseAccount b;
+  b.setWait(12, WaitSplit{10, 15, 17, RootCause::L2});
+  b.skipTo(12);
+  b.account(20);
+  EXPECT_EQ(at(b, RootCause::DramBandwidth), 5u);
+  EXPECT_EQ(at(b, RootCause::DramLatency), 0u);
+  EXPECT_EQ(at(b, RootCause::L2), 3u);
+}
+
+// A line ready at 180 asked at 100 whose DRAM read completed at 170, 40
+// cycles to its first data and 12 more for the rest on an idle channel: 70
+// cycles of DRAM: the latency 40 first (overlapping the bus's older data),
+// queueing 18, the transfer 12; the last 10 are the cache's.
+TEST(RootCauseAccount, SplitWaitPutsTheUnloadedAccessFirst) {
+  const WaitSplit w = splitWait(100, 180, DramProbe{170, 40, 12});
+  EXPECT_EQ(w.latency_end, 140u);
+  EXPECT_EQ(w.queue_end, 158u);
+  EXPECT_EQ(w.dram_end, 170u);
+  EXPECT_EQ(w.rest, RootCause::RopCacheMiss);
+  // No DRAM request (a fast-clear fill): the whole wait is the cache's.
+  const WaitSplit c = splitWait(100, 110, DramProbe{});
+  EXPECT_EQ(c.latency_end, 100u);
+  EXPECT_EQ(c.dram_end, 100u);
+}
+
+// Delays of 3 (lock) and 1 (ALU) share 10 cycles: 7 and 2 whole, the cycle
+// left to the larger remainder (both 2/4: the first cause, the lock): 8 and 2.
+// With no delay gathered the fallback takes all.
+TEST(RootCauseAccount, DelaySharesAddUpExactly) {
+  DelayShares s;
+  RootCauseAccount a;
+  s.add(RootCause::LockWait, 3);
+  s.add(RootCause::Alu, 1);
+  s.chargeTo(a, 10, RootCause::ScoreboardFull);
+  EXPECT_EQ(at(a, RootCause::LockWait), 8u);
+  EXPECT_EQ(at(a, RootCause::Alu), 2u);
+  s.chargeTo(a, 5, RootCause::ScoreboardFull);  // the delays were used up
+  EXPECT_EQ(at(a, RootCause::ScoreboardFull), 5u);
+  EXPECT_EQ(a.total(), 15u);
+}
+
+// The DRAM's split on the round configuration (DramTestConfig.hpp: controller
+// 40, tRCD = CL = 11, a 64 B burst 4 cycles, one channel):
+//  - one 64 B read at cycle 0 on an idle channel: 40 + 11 + 11 + 4 = 66, all latency;
+//  - a 256 B read: its first burst at 66, three more at the bus's rate: 78,
+//    66 latency and 12 bandwidth;
+//  - a 64 B read to another bank asked with it: its row opens in parallel, its
+//    data waits for the bus until 78: done 82, 66 latency and 16 queueing.
+TEST(RootCauseAccount, DramWaitSplitsIntoQueueingAndUnloadedAccess) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  ASSERT_EQ(m.unloadedCycles(false), kCtrl + kTrcd + kCl + kBurst);
+  m.resetProbe();
+  EXPECT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 66u);
+  EXPECT_EQ(m.probe().done, 66u);
+  EXPECT_EQ(m.probe().unloaded, 66u);
+  WaitSplit w = splitWait(0, 66, m.probe());
+  EXPECT_EQ(w.latency_end, 66u);
+  EXPECT_EQ(w.queue_end, 66u);
+  EXPECT_EQ(w.dram_end, 66u);
+
+  MemorySystem n(roundDramConfig(1), kRoundMhz);
+  n.resetProbe();
+  EXPECT_EQ(n.access(0, 0, 256, false, Surface::BlendArrays), 78u);
+  EXPECT_EQ(n.probe().transfer, 12u);
+  w = splitWait(0, 78, n.probe());
+  EXPECT_EQ(w.latency_end, 66u);
+  EXPECT_EQ(w.queue_end, 66u);
+  EXPECT_EQ(w.dram_end, 78u);  // bandwidth: its own three further bursts
+  ASSERT_NE(n.bankOf(8192), n.bankOf(0));
+  n.resetProbe();
+  EXPECT_EQ(n.access(0, 8192, 64, false, Surface::BlendArrays), 82u);
+  w = splitWait(0, 82, n.probe());
+  EXPECT_EQ(w.latency_end, 66u);
+  EXPECT_EQ(w.queue_end, 82u);  // queued 16 cycles behind the first read's data
+  EXPECT_EQ(w.dram_end, 82u);
+  // A posted write's latency is the controller's: accepted at 40 on an empty queue.
+  n.resetProbe();
+  EXPECT_EQ(n.access(0, 1 << 20, 64, true, Surface::BlendArrays), 40u);
+  EXPECT_EQ(n.probe().unloaded, 40u);
+}
+
+// The unloaded access is latency only where the buses were idle: the second
+// read above waits 66 cycles of unloaded access, then 16 of queueing. The
+// buses' record holds 20 busy cycles (the two reads' data, [62, 82)) in its
+// first 256-cycle block, taken as spread over the block: 66 x 20 / 256 = 5.2,
+// so 5 of the 66 cycles are bandwidth and 61 latency; bandwidth 5 + 16 = 21.
+TEST(RootCauseAccount, UnloadedAccessWhileTheBusIsBusyIsBandwidth) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  m.access(0, 0, 256, false, Surface::BlendArrays);
+  m.resetProbe();
+  ASSERT_EQ(m.access(0, 8192, 64, false, Surface::BlendArrays), 82u);
+  EXPECT_NEAR(m.busShare(0, 256), 20.0 / 256.0, 1e-12);
+  RootCauseAccount a;
+  a.setBusShare([&m](Cycle from, Cycle to) { return m.busShare(from, to); });
+  a.setWait(0, splitWait(0, 82, m.probe()));
+  a.account(82);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 61u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 21u);
+}
+
+}  // namespace
