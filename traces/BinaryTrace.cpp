@@ -215,7 +215,7 @@ void BinaryReader::parseHeader() {
                      size_, where, header_bytes));
   }
 
-  // Draw table.
+  // Draw table (and, in version 2, the draw state table after it).
   std::vector<unsigned char> table(static_cast<size_t>(min_header - fv::kFixedHeaderBytes));
   if (!table.empty() && !copyFromMapping(table.data(), map_ + fv::kFixedHeaderBytes, table.size()))
     throw TraceError(path_, changedMessage("its draw table cannot be read any more"));
@@ -250,7 +250,8 @@ void BinaryReader::parseHeader() {
     header_.draws.push_back(std::move(d));
   }
   if (header_.version == fv::kVersion2)
-    if (auto p = readDrawStates(h + fv::drawStateTableOffset(draw_count), header_.draws))
+    if (auto p = readDrawStates(table.data() + (fv::drawStateTableOffset(draw_count) - fv::kFixedHeaderBytes),
+                                header_.draws))
       fail(p->offset, std::nullopt, p->field, p->message);
 
   // Record count against the file size: catches truncation at open.

@@ -312,7 +312,7 @@ TEST_F(Csv, HeaderAndMetadataErrors) {
   const Case cases[] = {
       {"# width 4\n# height 4\ndraw,prim,x,y,z,r,g,b,a\n", 3, "draw", "header",
        "expected the column line 'draw,prim,x,y,z,r,g,b,a,opaque', found 'draw,prim,x,y,z,r,g,b,a'"},
-      {"# oitsim-trace v2\n" + cols, 1, "v2", "oitsim-trace", "unsupported version 'v2': this build reads v1"},
+      {"# oitsim-trace v3\n" + cols, 1, "v3", "oitsim-trace", "unsupported version 'v3': this build reads v1 and v2"},
       {"# width 0\n" + cols, 1, "0", "width", "width '0': expected an integer in 1..65535"},
       {"# width 4\n# height 70000\n" + cols, 2, "70000", "height", "expected an integer in 1..65535"},
       {"# width 4\n# width 5\n" + cols, 2, "width", "width", "duplicate '# width' line"},

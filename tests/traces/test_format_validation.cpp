@@ -71,9 +71,9 @@ TEST_F(FormatValidation, TruncatedDrawTable) {
 
 TEST_F(FormatValidation, UnsupportedVersion) {
   std::string b = validBytes();
-  poke<uint32_t>(b, 8, 2);
+  poke<uint32_t>(b, 8, 3);
   EXPECT_TRUE(contains(errorAtOpen(b), {path_ + ": byte offset 8, field version: unsupported "
-                                                "version 2: this build reads version 1"}));
+                                                "version 3: this build reads versions 1 and 2"}));
 }
 
 TEST_F(FormatValidation, ZeroOrOversizedFrame) {
