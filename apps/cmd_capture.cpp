@@ -1,8 +1,12 @@
-// oitsim capture: render meshes with a real OpenGL (Mesa llvmpipe, headless) and
-// record every fragment into a trace. See traces/CAPTURE.md.
+// oitsim capture: render meshes with a real OpenGL (Mesa llvmpipe, headless), or
+// replay an apitrace trace of any GL application (--apitrace), and record every
+// fragment into a trace. See traces/CAPTURE.md.
 #include <array>
 #include <charconv>
 #include <memory>
+#include <span>
+#include <tuple>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,9 +17,10 @@
 #include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "traces/TraceIO.hpp"
+#include "traces/capture/ApitraceCapture.hpp"
 #include "traces/capture/GlCapture.hpp"
 #include "traces/gen/Mesh.hpp"
-#include "traces/capture/Verify.hpp"
+#include "apps/CaptureVerify.hpp"
 
 namespace oit::cli {
 
@@ -28,11 +33,119 @@ struct CaptureArgs {
   std::vector<float> alphas;
   double azimuth = 0, elevation = 0, fov = 40;
   std::string shading = "lambert";
-  uint32_t frames = 1;
+  std::string frames = "1";  // mesh: a count; --apitrace: A or A-B
   double orbit_step = 10;
   bool verify = false;
   bool quiet = false;
+  std::string apitrace;      // the apitrace file (--apitrace)
+  std::string retracer;
+  bool strict = false;
 };
+
+// "N" (1..100000), the mesh capture's frame count.
+uint32_t parseFrameCount(const std::string& text) {
+  uint32_t n = 0;
+  auto [p, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec != std::errc() || p != text.data() + text.size() || n < 1 || n > 100000)
+    throw std::invalid_argument(fmt::format("--frames '{}': expected a frame count 1..100000 with --mesh", text));
+  return n;
+}
+
+// "A" or "A-B" (swap-buffer counts from 0, A <= B), the --apitrace frame range.
+std::pair<uint32_t, uint32_t> parseFrameRange(const std::string& text) {
+  auto bad = [&] {
+    return std::invalid_argument(
+        fmt::format("--frames '{}': expected a frame A or a range A-B of swap-buffer counts (from 0, A <= B) "
+                    "with --apitrace", text));
+  };
+  const size_t dash = text.find('-');
+  auto number = [&](std::string_view v) {
+    uint32_t n = 0;
+    auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+    if (v.empty() || ec != std::errc() || p != v.data() + v.size()) throw bad();
+    return n;
+  };
+  const std::string_view t(text);
+  const uint32_t a = number(t.substr(0, dash));
+  const uint32_t b = dash == std::string::npos ? a : number(t.substr(dash + 1));
+  if (a > b || b - a >= 100000) throw bad();
+  return {a, b};
+}
+
+// File of frame `frame` of the range: OUT itself for one frame, else OUT-FFFF.EXT
+// named by the frame's swap-buffer count.
+std::string rangeFileName(const std::string& output, uint32_t frame, uint32_t first, uint32_t last) {
+  if (first == last) return output;
+  const size_t slash = output.find_last_of('/');
+  const size_t dot = output.find_last_of('.');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+  const std::string stem = has_ext ? output.substr(0, dot) : output;
+  return fmt::format("{}-{:04d}{}", stem, frame, has_ext ? output.substr(dot) : "");
+}
+
+void runApitraceCapture(const CaptureArgs& a) {
+  capture::ApitraceOptions o;
+  o.trace = a.apitrace;
+  std::tie(o.first_frame, o.last_frame) = parseFrameRange(a.frames);
+  o.verify = a.verify;
+  o.max_records_per_draw = a.opts.max_records_per_draw;
+  o.retracer = a.retracer;
+  capture::checkApitraceFile(o.trace);
+  for (uint32_t f = o.first_frame; f <= o.last_frame; ++f) {
+    const std::string path = rangeFileName(a.output, f, o.first_frame, o.last_frame);
+    checkOutputFile("-o", path);
+    checkNotInput("-o", path, "apitrace trace --apitrace", o.trace);
+  }
+  const capture::ApitraceResult r = capture::captureApitrace(o);
+  // Every check before the first file is written: nothing half-written.
+  if (a.strict)
+    for (const capture::FrameCapture& f : r.frames)
+      if (!f.uncaptured.empty()) {
+        const capture::UncapturedDraw& u = f.uncaptured.front();
+        throw std::runtime_error(fmt::format(
+            "{}: frame {}: {} draw call{} not captured (--strict), the first draw {} ({}, program {}): {}", o.trace,
+            f.frame, f.uncaptured.size(), f.uncaptured.size() == 1 ? "" : "s", u.index, u.function, u.program,
+            capture::uncapturedReasonName(u.reason)));
+      }
+  std::vector<std::unique_ptr<FragmentSink>> writers;
+  for (const capture::FrameCapture& f : r.frames) {
+    auto w = createTraceWriter(rangeFileName(a.output, f.frame, o.first_frame, o.last_frame), f.header);
+    w->write(std::span<const Fragment>(f.fragments));
+    writers.push_back(std::move(w));
+  }
+  bool all_ok = true;
+  std::vector<std::string> verify_lines;
+  for (const capture::FrameCapture& f : r.frames) {
+    if (!a.verify) continue;
+    const capture::TransparentVerifyResult v = capture::verifyTransparentDraws(f);
+    verify_lines.push_back(fmt::format(
+        "  verify frame {}: its {} transparent fragments replayed with alpha vs GL's blend of the same draws "
+        "(RGBA32F): {} of {} channels differ (max {} ulp, {:.3g} abs); per-pixel counts: {} of {} pixels "
+        "differ{}{}",
+        f.frame, v.fragments, v.channels_differing, v.channels_compared, v.max_ulps, v.max_abs,
+        v.count_pixels_differing, v.pixels, v.first_difference.empty() ? "" : "; first: " + v.first_difference,
+        v.clamped ? fmt::format(" ({} premultiplied colours above their alpha, clamped for the trace: colours not compared)",
+                              v.clamped)
+                  : ""));
+    all_ok = all_ok && v.passes();
+  }
+  if (!all_ok) {
+    for (const std::string& l : verify_lines) fmt::print(stderr, "{}\n", l);
+    throw std::runtime_error(fmt::format("{}: capture --verify: the trace does not reproduce GL's blend (see above); "
+                                         "nothing written", o.trace));
+  }
+  uint64_t fragments = 0;
+  for (size_t i = 0; i < r.frames.size(); ++i) {
+    writers[i]->commit();
+    const capture::FrameCapture& f = r.frames[i];
+    fragments += f.fragments.size();
+    fmt::print("{}\n", capture::frameSummary(f, rangeFileName(a.output, f.frame, o.first_frame, o.last_frame)));
+    if (a.verify) fmt::print("{}\n", verify_lines[i]);
+  }
+  fmt::print("{} frame{}, {} fragments in {:.2f} s ({}fragments/s, replay included)\n", r.frames.size(),
+             r.frames.size() == 1 ? "" : "s", fragments, r.seconds,
+             humanCount(r.seconds > 0 ? fragments / r.seconds : 0.0) + " ");
+}
 
 // "r,g,b", each a number in [0, 1].
 std::array<float, 3> parseRgb(const std::string& text) {
@@ -55,6 +168,16 @@ std::array<float, 3> parseRgb(const std::string& text) {
 }
 
 void runCapture(CaptureArgs& a, bool has_az, bool has_el, bool has_fov) {
+  if (a.apitrace.empty() == a.opts.meshes.empty())
+    throw std::invalid_argument("capture needs exactly one of --mesh (meshes drawn by oitsim) and --apitrace "
+                                "(an apitrace trace of an application)");
+  if (!a.apitrace.empty()) {
+    runApitraceCapture(a);
+    return;
+  }
+  if (a.strict || !a.retracer.empty())
+    throw std::invalid_argument(fmt::format("{} applies to --apitrace only", a.strict ? "--strict" : "--retracer"));
+  const uint32_t frames = parseFrameCount(a.frames);
   capture::CaptureOptions& o = a.opts;
   if (has_az) o.azimuth_deg = a.azimuth;
   if (has_el) o.elevation_deg = a.elevation;
@@ -65,18 +188,18 @@ void runCapture(CaptureArgs& a, bool has_az, bool has_el, bool has_fov) {
 
   // -o is checked before GL starts; never overwrite a mesh being read (a named
   // mesh is its installed file).
-  for (uint32_t f = 0; f < a.frames; ++f) {
-    checkOutputFile("-o", capture::frameFileName(a.output, f, a.frames));
+  for (uint32_t f = 0; f < frames; ++f) {
+    checkOutputFile("-o", capture::frameFileName(a.output, f, frames));
     for (const std::string& m : o.meshes) {
       const gen::NamedMesh* named = gen::findNamedMesh(m);
-      checkNotInput("-o", capture::frameFileName(a.output, f, a.frames), "mesh --mesh", named ? named->path : m);
+      checkNotInput("-o", capture::frameFileName(a.output, f, frames), "mesh --mesh", named ? named->path : m);
     }
   }
   capture::Capturer cap(o);  // validates, loads meshes, creates the GL context
   if (!a.quiet) fmt::print(stderr, "capture: {} ({})\n", cap.renderer(), cap.glVersion());
   bool all_ok = true;
-  for (uint32_t f = 0; f < a.frames; ++f) {
-    const std::string path = capture::frameFileName(a.output, f, a.frames);
+  for (uint32_t f = 0; f < frames; ++f) {
+    const std::string path = capture::frameFileName(a.output, f, frames);
     const double az_off = a.orbit_step * f;
     std::unique_ptr<FragmentSink> writer = createTraceWriter(path, cap.header());
     const capture::CaptureStats st = cap.capture(*writer, az_off);
@@ -108,13 +231,16 @@ void runCapture(CaptureArgs& a, bool has_az, bool has_el, bool has_fov) {
 void addCaptureCommand(CLI::App& app) {
   auto args = std::make_shared<CaptureArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "capture", "Render meshes with Mesa's OpenGL (headless llvmpipe) and record every fragment");
+      "capture", "Render meshes with Mesa's OpenGL (headless llvmpipe), or replay an apitrace trace of an "
+                 "application through it, and record every fragment");
   capture::CaptureOptions& o = args->opts;
   o.meshes.clear();
   cmd->add_option("--mesh", o.meshes,
                   "Mesh to draw, a name (see `oitsim scenes`) or an .obj/.off/.ply[.gz] path; repeat for "
-                  "several draws")
-      ->required();
+                  "several draws");
+  cmd->add_option("--apitrace", args->apitrace,
+                  "An apitrace trace of a GLX application (`apitrace trace -o F.trace PROGRAM`): replay it with "
+                  "glretrace on a private Xvfb and capture the frames of --frames");
   cmd->add_option("-o,--output", args->output,
                   "Trace file to write (.csv for CSV); with --frames N: NAME-0000.EXT ...")
       ->required();
@@ -134,12 +260,18 @@ void addCaptureCommand(CLI::App& app) {
   cmd->add_option("--max-records-per-draw", o.max_records_per_draw,
                   "Records one GL draw call may hold (0 = the largest shader storage block)")
       ->capture_default_str();
-  cmd->add_option("--frames", args->frames, "Frames along an orbit, one trace each")
-      ->capture_default_str()
-      ->check(unsignedRange(1, 100000));
+  cmd->add_option("--frames", args->frames,
+                  "With --mesh: frames along an orbit, one trace each; with --apitrace: the frame A or range A-B "
+                  "(swap-buffer counts from 0), one trace each (OUT-FFFF.EXT for a range)")
+      ->capture_default_str();
+  cmd->add_flag("--strict", args->strict,
+                "With --apitrace: refuse a frame with draw calls the trace cannot express (fixed function, "
+                "several render targets, MSAA, stencil, ...) instead of listing them");
+  cmd->add_option("--retracer", args->retracer, "With --apitrace: apitrace's GL retracer (default glretrace on PATH)");
   cmd->add_option("--orbit-step", args->orbit_step, "Azimuth step between frames, degrees")->capture_default_str();
   cmd->add_flag("--verify", args->verify,
-                "Also check each trace against GL's own blended framebuffer and a counting pass");
+                "Also check each trace against GL's own blended framebuffer and a counting pass (with --apitrace: "
+                "the frame's transparent draws against GL's blend of those draws)");
   cmd->add_flag("-q,--quiet", args->quiet, "Do not print the GL renderer");
   cmd->callback([args, az, el, fov] { runCapture(*args, az->count() > 0, el->count() > 0, fov->count() > 0); });
 }

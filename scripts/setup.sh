@@ -14,6 +14,9 @@ packages=(
   # headless OpenGL for `oitsim capture` (loaded at run time, only by capture):
   # GLVND's libEGL and libOpenGL, Mesa's EGL (surfaceless) and llvmpipe; headers to build
   libegl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
+  # `oitsim capture --apitrace`: apitrace's tracer and glretrace, Xvfb for GLX without
+  # a display, Xlib headers for the tests' own small GL application
+  apitrace apitrace-tracers xvfb libx11-dev libglx-dev
   # `oitsim report` (plots, PFM conversion), YAML sweep specs, the report's browser test
   python3 python3-matplotlib python3-yaml chromium
   # the sanitizer and fuzzing builds (scripts/sanitize.sh, scripts/fuzz.sh): clang,

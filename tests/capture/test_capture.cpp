@@ -18,7 +18,7 @@
 
 #include "traces/TraceIO.hpp"
 #include "traces/capture/GlCapture.hpp"
-#include "traces/capture/Verify.hpp"
+#include "apps/CaptureVerify.hpp"
 #include "traces/gen/Mesh.hpp"
 #include "traces/gen/Scenes.hpp"
 

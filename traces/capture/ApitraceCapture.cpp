@@ -1,6 +1,7 @@
 #include "traces/capture/ApitraceCapture.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -84,19 +85,73 @@ std::string readFile(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(f), {});
 }
 
-// Runs the retracer with the interposer preloaded; returns its exit status
+// A private X server for glretrace (which presents through GLX even with
+// --headless): Xvfb on a free display it picks itself (-displayfd), stopped with the
+// capture. Without Xvfb the capture uses $DISPLAY.
+class PrivateXServer {
+ public:
+  explicit PrivateXServer(const std::string& xvfb) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+      throw std::runtime_error(fmt::format("cannot create a pipe for Xvfb: {}", std::strerror(errno)));
+    std::vector<std::string> args = {xvfb, "-displayfd", "3", "-nolisten", "tcp", "-screen", "0", "1920x1080x24"};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], 3);
+    const int rc = posix_spawn(&pid_, xvfb.c_str(), &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(fds[1]);
+    if (rc != 0) {
+      ::close(fds[0]);
+      throw std::runtime_error(fmt::format("cannot start {}: {}", xvfb, std::strerror(rc)));
+    }
+    std::string number;
+    char c = 0;
+    while (::read(fds[0], &c, 1) == 1 && c != '\n') number += c;
+    ::close(fds[0]);
+    if (number.empty()) {
+      stop();
+      throw std::runtime_error(fmt::format("{} did not start (no display number on -displayfd)", xvfb));
+    }
+    display_ = ":" + number;
+  }
+  ~PrivateXServer() { stop(); }
+  PrivateXServer(const PrivateXServer&) = delete;
+  PrivateXServer& operator=(const PrivateXServer&) = delete;
+  const std::string& display() const { return display_; }
+
+ private:
+  void stop() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGTERM);
+    int status = 0;
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = 0;
+  }
+  pid_t pid_ = 0;
+  std::string display_;
+};
+
+// Runs the retracer with the interposer as its libGL.so.1; returns its exit status
 // (the raw waitpid status).
-int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std::string& interposer,
-                const std::string& stream_path, const std::string& log_path) {
+int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std::string& gl_dir,
+                const std::string& display, const std::string& stream_path, const std::string& log_path) {
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e) {
     const std::string_view v(*e);
-    if (v.starts_with("LD_PRELOAD=") || v.starts_with("WAFFLE_PLATFORM=") || v.starts_with("OITSIM_")) continue;
+    if (v.starts_with("LD_LIBRARY_PATH=") || v.starts_with("DISPLAY=") || v.starts_with("OITSIM_")) continue;
     env.emplace_back(v);
   }
-  const char* preload = std::getenv("LD_PRELOAD");
-  env.push_back("LD_PRELOAD=" + interposer + (preload && *preload ? std::string(" ") + preload : ""));
-  env.push_back("WAFFLE_PLATFORM=surfaceless_egl");  // headless: no X server, no window
+  const char* lib_path = std::getenv("LD_LIBRARY_PATH");
+  env.push_back("LD_LIBRARY_PATH=" + gl_dir + (lib_path && *lib_path ? std::string(":") + lib_path : ""));
+  env.push_back("DISPLAY=" + display);
   env.push_back("OITSIM_STREAM=" + stream_path);
   env.push_back(fmt::format("OITSIM_FRAMES={}-{}", o.first_frame, o.last_frame));
   env.push_back(std::string("OITSIM_VERIFY=") + (o.verify ? "1" : "0"));
@@ -142,7 +197,7 @@ void toFragment(const st::GpuRecord& r, const st::DrawChunk& d, FrameCapture& f,
     if (c[3] > 0.0f) {
       for (int k = 0; k < 3; ++k) {
         const float s = c[k] / c[3];
-        if (s > 1.0f) clamped = true;
+        if (s > 1.0f) ++f.premultiplied_clamped;
         c[k] = std::min(s, 1.0f);
       }
     } else if (c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f) {
@@ -270,11 +325,16 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
   if (o.first_frame > o.last_frame)
     throw std::invalid_argument(fmt::format("--frames {}-{}: the first frame is after the last", o.first_frame,
                                             o.last_frame));
-  const std::string retracer = findOnPath(o.retracer.empty() ? "eglretrace" : o.retracer);
+  const std::string retracer = findOnPath(o.retracer.empty() ? "glretrace" : o.retracer);
   if (retracer.empty())
     throw std::runtime_error(fmt::format(
         "{} not found: the capture replays the trace with apitrace's retracer; apt-get install apitrace "
-        "(scripts/setup.sh installs it)", o.retracer.empty() ? "eglretrace" : o.retracer));
+        "(scripts/setup.sh installs it)", o.retracer.empty() ? "glretrace" : o.retracer));
+  const std::string xvfb = findOnPath("Xvfb");
+  const char* user_display = std::getenv("DISPLAY");
+  if (xvfb.empty() && !(user_display && *user_display))
+    throw std::runtime_error("Xvfb not found and DISPLAY not set: glretrace presents through GLX even headless; "
+                             "apt-get install xvfb (scripts/setup.sh installs it)");
   const std::string interposer = o.interposer.empty() ? defaultInterposerPath() : o.interposer;
   if (::access(interposer.c_str(), R_OK) != 0)
     throw std::runtime_error(fmt::format("cannot read the interposer {} (built with oitsim, next to the executable): {}",
@@ -282,7 +342,17 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
 
   TempDir tmp;
   const std::string stream_path = tmp.path + "/stream.bin", log_path = tmp.path + "/retracer.log";
-  const int status = runRetracer(o, retracer, interposer, stream_path, log_path);
+  // The retracer opens "libGL.so.1": here that is the interposer.
+  const std::string gl_dir = tmp.path + "/gl";
+  fs::create_directory(gl_dir);
+  fs::create_symlink(fs::absolute(interposer), gl_dir + "/libGL.so.1");
+  int status = 0;
+  if (!xvfb.empty()) {
+    const PrivateXServer x(xvfb);
+    status = runRetracer(o, retracer, gl_dir, x.display(), stream_path, log_path);
+  } else {
+    status = runRetracer(o, retracer, gl_dir, user_display, stream_path, log_path);
+  }
   ApitraceResult result;
   result.renderer_log = readFile(log_path);
   const std::string data = readFile(stream_path);
@@ -374,7 +444,7 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
     throw std::runtime_error(fmt::format(
         "{}: frame range {}-{} is past the end: the trace has {} frame{} (swap-buffer counts 0-{}){}", o.trace,
         o.first_frame, o.last_frame, frames, frames == 1 ? "" : "s", frames ? frames - 1 : 0,
-        frames == 0 ? "; no frame was presented (or the retracer failed: " + log_tail + ")" : ""));
+        frames == 0 ? "; no frame was presented (an EGL trace? the capture replays GLX traces; or the retracer failed: " + log_tail + ")" : ""));
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -1,6 +1,7 @@
-// `oitsim capture --apitrace F.trace --frames A[-B]`: replays an apitrace trace with
-// apitrace's own retracer (eglretrace, headless: EGL surfaceless through waffle) with
-// liboitsim_interposer.so preloaded (traces/capture/interposer/), reads the stream it
+// `oitsim capture --apitrace F.trace --frames A[-B]`: replays an apitrace trace of a
+// GLX application with apitrace's own retracer (glretrace --headless, on a private
+// Xvfb) with liboitsim_interposer.so as its libGL.so.1 (traces/capture/interposer/),
+// reads the stream it
 // writes (interposer/CaptureStream.hpp) and turns each frame into a trace of format
 // v2: fragments in API order, a draw table with each draw's blend and depth state,
 // and the draws the trace cannot express listed with why. See traces/CAPTURE.md.
@@ -21,7 +22,7 @@ struct ApitraceOptions {
   uint32_t first_frame = 0, last_frame = 0;  // swap-buffer counts, inclusive
   bool verify = false;              // GL's own blend and count of the transparent draws
   uint64_t max_records_per_draw = 0;  // 0 = the largest shader storage block
-  std::string retracer;             // "" = eglretrace on PATH
+  std::string retracer;             // "" = glretrace on PATH
   std::string interposer;           // "" = liboitsim_interposer.so next to this executable
 };
 
@@ -56,6 +57,7 @@ struct FrameCapture {
   uint64_t colour_clamped = 0;      // colour outside [0,1] or not finite, clamped (NaN -> 0)
   uint64_t depth_clamped = 0;       // depth written outside [0,1] or not finite, clamped
   uint64_t premultiplied_zero_alpha = 0;  // premultiplied colour over alpha 0: straight colour unknown, 0
+  uint64_t premultiplied_clamped = 0;     // premultiplied colour above its alpha: straight colour clamped to 1
   std::optional<GlTransparentReference> reference;  // with verify
 };
 

@@ -56,6 +56,9 @@ std::string frameSummary(const FrameCapture& f, const std::string& output) {
                                 f.multi_draws == 1 ? "" : "s"));
   if (f.colour_clamped) notes.push_back(fmt::format("{} fragments with colour clamped into [0, 1]", f.colour_clamped));
   if (f.depth_clamped) notes.push_back(fmt::format("{} fragments with depth clamped into [0, 1]", f.depth_clamped));
+  if (f.premultiplied_clamped)
+    notes.push_back(fmt::format("{} premultiplied colour components above their alpha (straight colour clamped to 1)",
+                                f.premultiplied_clamped));
   if (f.premultiplied_zero_alpha)
     notes.push_back(fmt::format("{} premultiplied fragments with colour over alpha 0 (recorded black)",
                                 f.premultiplied_zero_alpha));

@@ -627,6 +627,18 @@ CaptureStats Capturer::capture(FragmentSink& sink, double azimuth_offset_deg) {
   return st;
 }
 
+std::vector<std::array<float, 4>> Capturer::clipVertices(uint32_t draw, double azimuth_offset_deg) const {
+  const Scene s = impl_->buildScene(azimuth_offset_deg);
+  std::vector<std::array<float, 4>> out;
+  for (const DrawGeom& d : s.draws) {
+    if (d.id != draw) continue;
+    for (const Part& p : d.parts)
+      for (uint64_t v = 3 * p.first_tri; v < 3 * (p.first_tri + p.tris); ++v)
+        out.push_back({s.soup[v].clip[0], s.soup[v].clip[1], s.soup[v].clip[2], s.soup[v].clip[3]});
+  }
+  return out;
+}
+
 GlReference Capturer::reference(double azimuth_offset_deg) {
   Impl& m = *impl_;
   const Scene s = m.buildScene(azimuth_offset_deg);

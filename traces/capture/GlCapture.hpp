@@ -94,6 +94,10 @@ class Capturer {
   CaptureStats capture(FragmentSink& sink, double azimuth_offset_deg = 0);
   // The same frame blended and counted by GL itself.
   GlReference reference(double azimuth_offset_deg = 0);
+  // The clip-space (x, y, z, w) vertices of trace draw `draw`, three per triangle
+  // in submission order, exactly as capture() feeds them to GL (so an application
+  // drawing them rasterises the same fragments).
+  std::vector<std::array<float, 4>> clipVertices(uint32_t draw, double azimuth_offset_deg = 0) const;
 
  private:
   struct Impl;

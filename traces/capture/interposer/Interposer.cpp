@@ -1,8 +1,11 @@
-// The entry points liboitsim_interposer.so puts in front of the GL library when it
-// is loaded with LD_PRELOAD into apitrace's retracer. apitrace's retracers resolve
-// GL with dlsym(RTLD_NEXT, ...) first, which finds a preloaded library before libGL;
-// glXGetProcAddress and eglGetProcAddress are interposed too, for the names below.
-// Each wrapper forwards to the real function and tells the Recorder.
+// The entry points liboitsim_interposer.so puts in front of the GL library. apitrace's
+// glretrace opens "libGL.so.1" with dlopen and looks every entry point up in it with
+// dlsym; `oitsim capture --apitrace` puts a folder first on the retracer's
+// LD_LIBRARY_PATH where libGL.so.1 is this library. dlsym on it finds the wrappers
+// below, and every other name in its dependencies, GLVND's libOpenGL.so.0 (GL) and
+// libGLX.so.0 (GLX), which dispatch to Mesa as libGL.so.1 itself does.
+// glXGetProcAddress(ARB) is wrapped too, for the names below. Each wrapper forwards
+// to the real function and tells the Recorder.
 #include <dlfcn.h>
 
 #include <cstring>
@@ -137,22 +140,11 @@ OITSIM_EXPORT void glDeleteObjectARB(GLuint object) {
   next(object);
 }
 
-// Frame boundaries: the retracer presents through waffle (eglretrace), GLX
-// (glretrace) or EGL.
-OITSIM_EXPORT bool waffle_window_swap_buffers(void* window) {
-  static auto next = real<bool (*)(void*)>("waffle_window_swap_buffers");
-  Recorder::get().swap();
-  return next(window);
-}
+// Frame boundaries: glretrace presents with GLX.
 OITSIM_EXPORT void glXSwapBuffers(void* display, unsigned long drawable) {
   static auto next = real<void (*)(void*, unsigned long)>("glXSwapBuffers");
   Recorder::get().swap();
   next(display, drawable);
-}
-OITSIM_EXPORT unsigned eglSwapBuffers(void* display, void* surface) {
-  static auto next = real<unsigned (*)(void*, void*)>("eglSwapBuffers");
-  Recorder::get().swap();
-  return next(display, surface);
 }
 
 // GetProcAddress: hand out the wrappers above for their names.
@@ -160,33 +152,25 @@ namespace {
 
 void* ownProc(const char* name) {
   if (std::strncmp(name, "gl", 2) != 0) return nullptr;
-  void* self = dlsym(RTLD_DEFAULT, name);
-  Dl_info info{};
+  // This library's own handle: dlsym on it searches it first, then its dependencies.
   static Dl_info mine = [] {
     Dl_info d{};
     dladdr(reinterpret_cast<void*>(&ownProc), &d);
     return d;
   }();
-  if (self && dladdr(self, &info) && info.dli_fbase == mine.dli_fbase) return self;
+  static void* self = mine.dli_fname ? dlopen(mine.dli_fname, RTLD_LAZY | RTLD_NOLOAD) : nullptr;
+  void* p = self ? dlsym(self, name) : nullptr;
+  Dl_info info{};
+  if (p && dladdr(p, &info) && info.dli_fbase == mine.dli_fbase) return p;
   return nullptr;
 }
 
 }  // namespace
 
 OITSIM_EXPORT void* glXGetProcAddressARB(const unsigned char* name) {
-  static auto next = reinterpret_cast<void* (*)(const unsigned char*)>(dlsym(RTLD_NEXT, "glXGetProcAddressARB"));
+  static auto next = real<void* (*)(const unsigned char*)>("glXGetProcAddressARB");
   if (void* p = ownProc(reinterpret_cast<const char*>(name))) return p;
   return next ? next(name) : nullptr;
 }
 OITSIM_EXPORT void* glXGetProcAddress(const unsigned char* name) { return glXGetProcAddressARB(name); }
-OITSIM_EXPORT void* eglGetProcAddress(const char* name) {
-  static auto next = reinterpret_cast<void* (*)(const char*)>(dlsym(RTLD_NEXT, "eglGetProcAddress"));
-  if (void* p = ownProc(name)) return p;
-  if (next) return next(name);
-  // libEGL loaded RTLD_LOCAL (by waffle): ask it directly.
-  void* egl = dlopen("libEGL.so.1", RTLD_LAZY | RTLD_NOLOAD);
-  auto get = egl ? reinterpret_cast<void* (*)(const char*)>(dlsym(egl, "eglGetProcAddress")) : nullptr;
-  return get ? get(name) : nullptr;
-}
-
 __attribute__((destructor)) static void oitsimInterposerExit() { Recorder::get().atExit(); }

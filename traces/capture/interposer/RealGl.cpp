@@ -2,21 +2,30 @@
 
 #include <dlfcn.h>
 
+#include <initializer_list>
+
 namespace oit::capture::interposer {
 
 void* realProc(const char* name) {
-  if (void* p = dlsym(RTLD_NEXT, name)) return p;
-  // Entry points GLVND's libGL does not export: ask the window system's loader.
+  // The interposer is loaded as the retracer's libGL.so.1 (ApitraceCapture puts it
+  // first on LD_LIBRARY_PATH) and depends on GLVND's libOpenGL.so.0 (every GL entry
+  // point) and libGLX.so.0 (GLX): the real functions are there, past the wrappers.
+  static void* opengl = dlopen("libOpenGL.so.0", RTLD_LAZY | RTLD_LOCAL);
+  static void* glx = dlopen("libGLX.so.0", RTLD_LAZY | RTLD_LOCAL);
+  for (void* lib : {opengl, glx})
+    if (lib)
+      if (void* p = dlsym(lib, name)) return p;
+  // Entry points no library exports: ask the window system's loader.
   using GetProc = void* (*)(const char*);
+  static GetProc glx_get = glx ? reinterpret_cast<GetProc>(dlsym(glx, "glXGetProcAddressARB")) : nullptr;
   static GetProc egl_get = [] {
     void* egl = dlopen("libEGL.so.1", RTLD_LAZY | RTLD_NOLOAD);
     return egl ? reinterpret_cast<GetProc>(dlsym(egl, "eglGetProcAddress")) : nullptr;
   }();
-  static GetProc glx_get = reinterpret_cast<GetProc>(dlsym(RTLD_NEXT, "glXGetProcAddressARB"));
-  if (egl_get)
-    if (void* p = egl_get(name)) return p;
   if (glx_get)
     if (void* p = glx_get(name)) return p;
+  if (egl_get)
+    if (void* p = egl_get(name)) return p;
   return nullptr;
 }
 

@@ -1,6 +1,6 @@
 // The real GL entry points the interposer calls for its own work, resolved past
-// itself (dlsym(RTLD_NEXT), then eglGetProcAddress / glXGetProcAddressARB), so
-// that none of its own calls goes through its own interposed functions.
+// itself (in GLVND's libOpenGL.so.0 and libGLX.so.0, then glXGetProcAddressARB /
+// eglGetProcAddress), so that none of its own calls goes through its own wrappers.
 #pragma once
 
 #include <GL/glcorearb.h>
@@ -69,7 +69,8 @@ void* realProc(const char* name);
 // Optional (desktop GL 4.5 direct state access): nullptr on ES.
 #define OITSIM_REAL_GL_OPTIONAL(X)                                               \
   X(PFNGLGETTEXTURELEVELPARAMETERIVPROC, glGetTextureLevelParameteriv)           \
-  X(PFNGLGETNAMEDRENDERBUFFERPARAMETERIVPROC, glGetNamedRenderbufferParameteriv)
+  X(PFNGLGETNAMEDRENDERBUFFERPARAMETERIVPROC, glGetNamedRenderbufferParameteriv)  \
+  X(PFNGLCLAMPCOLORPROC, glClampColor)
 
 struct RealGl {
 #define OITSIM_REAL_MEMBER(type, name) type name = nullptr;

@@ -117,9 +117,9 @@ bool Recorder::drawableSize(uint32_t& w, uint32_t& h) const {
   using GlxDisplay = void* (*)();
   using GlxDrawable = unsigned long (*)();
   using GlxQuery = void (*)(void*, unsigned long, int, unsigned*);
-  static auto gdisplay = reinterpret_cast<GlxDisplay>(dlsym(RTLD_NEXT, "glXGetCurrentDisplay"));
-  static auto gdrawable = reinterpret_cast<GlxDrawable>(dlsym(RTLD_NEXT, "glXGetCurrentDrawable"));
-  static auto gquery = reinterpret_cast<GlxQuery>(dlsym(RTLD_NEXT, "glXQueryDrawable"));
+  static auto gdisplay = reinterpret_cast<GlxDisplay>(realProc("glXGetCurrentDisplay"));
+  static auto gdrawable = reinterpret_cast<GlxDrawable>(realProc("glXGetCurrentDrawable"));
+  static auto gquery = reinterpret_cast<GlxQuery>(realProc("glXQueryDrawable"));
   if (gdisplay && gdrawable && gquery) {
     void* d = gdisplay();
     const unsigned long drawable = gdrawable();

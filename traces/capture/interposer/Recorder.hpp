@@ -69,6 +69,7 @@ class Recorder {
     bool verify = false;
     SavedBinding records, counts;  // the application's bindings at the interposer's indices
     GLint saved_draw_fb = 0, saved_read_fb = 0;
+    GLint saved_clamp = -1;  // GL_CLAMP_FRAGMENT_COLOR during the verify drawing (-1: not set)
   };
 
   Recorder();

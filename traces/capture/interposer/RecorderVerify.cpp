@@ -12,6 +12,10 @@ namespace oit::capture::interposer {
 
 using namespace stream;
 
+namespace {
+constexpr GLenum kClampFragmentColor = 0x891B;  // GL_CLAMP_FRAGMENT_COLOR (compatibility profile, glext.h)
+}  // namespace
+
 void Recorder::ensureVerifyTarget() {
   RealGl& g = gl();
   if (verify_fb_ && verify_w_ == frame_w_ && verify_h_ == frame_h_) return;
@@ -131,6 +135,18 @@ void Recorder::enterVerify(Pending& p) {
     g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, verify_fb_);
     g.glFramebufferRenderbuffer(GL_DRAW_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, 0);
   }
+  // The trace holds colours clamped into [0, 1], which is also what the
+  // application's usual fixed-point target blends; clamp the verify drawing into
+  // the float target the same way (compatibility contexts; a core context has no
+  // clamp and its unclamped colours are reported, CAPTURE.md).
+  if (g.glClampColor) {
+    GLint clamp = 0;
+    g.glGetIntegerv(kClampFragmentColor, &clamp);
+    if (g.glGetError() == GL_NO_ERROR) {
+      g.glClampColor(kClampFragmentColor, GL_TRUE);
+      if (g.glGetError() == GL_NO_ERROR) p.saved_clamp = clamp;
+    }
+  }
   p.counts = bindStorage(count_binding_, count_buffer_);
   g.glProgramUniform1ui(p.chunk.program, p.info->loc_width, verify_w_);
   g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 2);
@@ -139,6 +155,7 @@ void Recorder::enterVerify(Pending& p) {
 void Recorder::leaveVerify(Pending& p) {
   RealGl& g = gl();
   g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 0);
+  if (p.saved_clamp >= 0) g.glClampColor(kClampFragmentColor, static_cast<GLenum>(p.saved_clamp));
   restoreStorage(count_binding_, p.counts);
   g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(p.saved_draw_fb));
   g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(p.saved_read_fb));

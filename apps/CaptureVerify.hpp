@@ -41,12 +41,14 @@ VerifyResult verifyTrace(const std::string& path, const GlReference& ref);
 // over black, against GL's blend of the same draws into the interposer's RGBA32F
 // target (GlTransparentReference); per-pixel record counts against that drawing's
 // counts. Straight over is exact; premultiplied colours are divided by alpha for the
-// trace and multiplied again by the model: within kPremultipliedUlpBound. Fragments
-// whose colour was clamped into [0,1] for the trace are blended unclamped by GL:
-// their pixels may differ by more (reported, counted in colour_clamped).
+// trace and multiplied again by the model: within kPremultipliedUlpBound. GL draws
+// the reference with its fragment colours clamped into [0, 1] (as the trace holds
+// them, and as a fixed-point target blends them). A premultiplied colour above its
+// alpha (or over alpha 0) has no straight colour in [0, 1]: with any such
+// fragment the colours are not compared (reported, `clamped`).
 struct TransparentVerifyResult : VerifyResult {
   bool premultiplied = false;  // the frame has premultiplied-over draws
-  uint64_t clamped = 0;        // fragments whose colour the trace clamped
+  uint64_t clamped = 0;        // premultiplied fragments whose straight colour the trace clamped
   static constexpr uint32_t kPremultipliedUlpBound = 8;
   bool passes() const {
     if (count_pixels_differing != 0) return false;

@@ -1,4 +1,4 @@
-#include "traces/capture/Verify.hpp"
+#include "apps/CaptureVerify.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -69,7 +69,7 @@ TransparentVerifyResult verifyTransparentDraws(const FrameCapture& frame) {
       ++counts[static_cast<size_t>(f.y) * h.width + f.x];
     }
   v.fragments = frags.size();
-  v.clamped = frame.colour_clamped + frame.premultiplied_zero_alpha;
+  v.clamped = frame.premultiplied_clamped + frame.premultiplied_zero_alpha;
   for (size_t p = 0; p < v.pixels; ++p)
     if (counts[p] != ref.count[p] && v.count_pixels_differing++ == 0)
       v.first_difference = fmt::format("pixel ({}, {}): {} records, GL counted {}", p % h.width, p / h.width,
