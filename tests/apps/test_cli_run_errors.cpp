@@ -323,7 +323,7 @@ TEST_F(CliRunErrors, BadNumbersAreOneLineErrorsNamingTheOption) {
     EXPECT_EQ(r.output, "oitsim: error: --height: expected a non-negative integer, got '-3' (see --help)\n") << cmd;
   }
   r = runOitsim("capture --mesh bunny -o " + dir_->file("c.oitt") + " --frames 100001");
-  EXPECT_EQ(r.output, "oitsim: error: --frames: Value 100001 not in range 1 to 100000 (see --help)\n");
+  EXPECT_EQ(r.output, "oitsim: error: --frames '100001': expected a frame count 1..100000 with --mesh\n");
   EXPECT_FALSE(fs::exists(dir_->file("g.oitt")));
   EXPECT_FALSE(fs::exists(dir_->file("c.oitt")));
   EXPECT_EQ(runOitsim("run --help").exit_code, 0);

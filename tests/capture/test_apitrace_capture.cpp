@@ -27,6 +27,7 @@
 #include "traces/capture/GlCapture.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 #include "apps/CaptureVerify.hpp"
+#include "capture/CaptureTestUtil.hpp"
 
 namespace oit::capture {
 namespace {
@@ -38,14 +39,7 @@ bool same(const std::vector<Fragment>& a, const std::vector<Fragment>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Fragment)) == 0);
 }
 
-class FragmentVector : public FragmentSink {
- public:
-  std::vector<Fragment> fragments;
-  void write(const Fragment& f) override { fragments.push_back(f); }
-  void write(std::span<const Fragment> fs) override { fragments.insert(fragments.end(), fs.begin(), fs.end()); }
-  void commit() override {}
-  uint64_t written() const override { return fragments.size(); }
-};
+using test_util::VectorSink;
 
 bool onPath(const std::string& name) {
   const char* path = std::getenv("PATH");
@@ -60,15 +54,7 @@ bool onPath(const std::string& name) {
   }
 }
 
-int run(const std::string& command, std::string* out) {
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (!p) return -1;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-  const int status = pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int run(const std::string& command, std::string* out) { return test_util::runCommand(command, out); }
 
 // A cube, so that every pixel it covers has a front and a back face: depth
 // complexity 2, which the depth test with writes halves.
@@ -162,7 +148,7 @@ class ApitraceCapture : public ::testing::Test {
 
   fs::path dir_;
   int traces_ = 0;
-  FragmentVector mesh_;
+  VectorSink mesh_;
   std::vector<std::array<float, 4>> clip_;
 };
 

@@ -19,6 +19,7 @@
 #include "traces/TraceIO.hpp"
 #include "traces/capture/GlCapture.hpp"
 #include "apps/CaptureVerify.hpp"
+#include "capture/CaptureTestUtil.hpp"
 #include "traces/gen/Mesh.hpp"
 #include "traces/gen/Scenes.hpp"
 
@@ -27,14 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class VectorSink : public FragmentSink {
- public:
-  std::vector<Fragment> fragments;
-  void write(const Fragment& f) override { fragments.push_back(f); }
-  void write(std::span<const Fragment> fs) override { fragments.insert(fragments.end(), fs.begin(), fs.end()); }
-  void commit() override {}
-  uint64_t written() const override { return fragments.size(); }
-};
+using test_util::VectorSink;
 
 // Skips only when EGL/GL truly cannot start here (or the mesh is not installed).
 class Capture : public ::testing::Test {
@@ -400,15 +394,7 @@ TEST_F(Capture, VerifyCatchesReorderedAndLostFragments) {
 TEST_F(Capture, CommandLineWritesOrbitFramesAndVerifies) {
   requireMesh("bunny");
   const std::string oitsim = std::string(OITSIM_BINARY_DIR) + "/apps/oitsim";
-  auto run = [&](const std::string& args, std::string* out) {
-    FILE* p = popen((oitsim + " " + args + " 2>&1").c_str(), "r");
-    if (!p) return -1;
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-    const int status = pclose(p);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  };
+  auto run = [&](const std::string& args, std::string* out) { return test_util::runCommand(oitsim + " " + args, out); };
   std::string out;
   ASSERT_EQ(run(fmt::format("capture --mesh bunny --width 160 --height 120 --frames 2 --orbit-step 15 "
                             "--verify -o {}", path("orbit.oitt")), &out), 0) << out;

@@ -328,7 +328,7 @@ TEST(FormatBinary, WriterRejectsBadHeadersAndCreatesNoFile) {
   const Case cases[] = {
       {hd([](TraceHeader& h) { h.width = 0; }), "byte offset 16, field width: width is 0"},
       {hd([](TraceHeader& h) { h.height = 65536; }), "byte offset 20, field height: height 65536 exceeds 65535"},
-      {hd([](TraceHeader& h) { h.version = 2; }), "byte offset 8, field version"},
+      {hd([](TraceHeader& h) { h.version = 3; }), "byte offset 8, field version"},
       {hd([](TraceHeader& h) { h.encoding = static_cast<ColourEncoding>(5); }), "byte offset 32, field encoding"},
       {hd([](TraceHeader& h) { h.camera = CameraPlanes{10.0f, 1.0f}; }), "byte offset 44, field camera"},
       {hd([](TraceHeader& h) { h.draws[2].id = 7; }), "byte offset 192, field draw[2].id: duplicate draw id 7 (also draw table entry 1)"},

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "traces/capture/GlEntryPoints.hpp"
+#include "traces/capture/interposer/CaptureStream.hpp"
 
 #include "traces/gen/Backdrop.hpp"
 #include "traces/gen/Math.hpp"
@@ -113,15 +114,9 @@ struct EglContext {
 // Shading modes of the fragment shader (u_shade).
 enum ShadeMode : int { kConstant = 0, kLambertTwoSided = 1, kLambertOneSided = 2, kChecker = 3 };
 
-// One record of the storage buffer (std430): 32 bytes.
-struct GpuRecord {
-  uint32_t xy;  // x | y << 16
-  float z;
-  uint32_t prim;
-  uint32_t draw;
-  float rgba[4];
-};
-static_assert(sizeof(GpuRecord) == 32);
+// One record of the storage buffer (std430, 32 bytes): the same layout as the
+// apitrace interposer's records.
+using stream::GpuRecord;
 
 constexpr const char* kVertexShader = R"(#version 450 core
 layout(location = 0) in vec4 a_clip;    // computed on the CPU exactly as oitsim gen does

@@ -1,5 +1,5 @@
-// The stream the interposed GL library (liboitsim_interposer.so, loaded into
-// apitrace's retracer with LD_PRELOAD) writes for `oitsim capture --apitrace`:
+// The stream the interposed GL library (liboitsim_interposer.so, loaded by
+// apitrace's retracer as its libGL.so.1) writes for `oitsim capture --apitrace`:
 // one file, native little-endian structs, read back by traces/capture/ApitraceCapture.cpp.
 // Both sides include this header, so the layout cannot drift.
 //

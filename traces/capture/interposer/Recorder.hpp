@@ -4,7 +4,7 @@
 // RGBA32F target. Everything it learns goes into the stream (CaptureStream.hpp).
 //
 // Inert unless OITSIM_STREAM names the stream file (so a child process that
-// inherits LD_PRELOAD is not affected). Environment:
+// inherits LD_LIBRARY_PATH is not affected). Environment:
 //   OITSIM_STREAM=path   OITSIM_FRAMES=A-B   OITSIM_VERIFY=1   OITSIM_MAX_RECORDS=N
 #pragma once
 
