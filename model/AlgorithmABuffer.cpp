@@ -120,6 +120,11 @@ class ABuffer final : public OitAlgorithm {
     return rw;
   }
 
+  void listNodes(const uint32_t* w, uint32_t limit, std::vector<uint32_t>& out) const override {
+    out.clear();
+    for (uint32_t i = w[0]; i != kNil && out.size() < limit; i = pool_[i].next) out.push_back(i);
+  }
+
   // Insert: read + write the head (an atomic exchange), write one node (in
   // the pool, not in the per-pixel state). A dropped fragment touches nothing.
   unsigned readBytes(unsigned, InsertOutcome o) const override { return o == InsertOutcome::Discarded ? 0 : 4; }

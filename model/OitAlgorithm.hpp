@@ -214,6 +214,11 @@ class OitAlgorithm {
   virtual uint64_t poolCapacityNodes() const { return 0; }
   // A-buffer: what resolve() of this pixel walks and sorts; zero otherwise.
   virtual ResolveWork resolveWork(const uint32_t* words) const { return {}; }
+  // A-buffer: the pool indices of the pixel's list in walk order (newest
+  // first), at most `limit`, into `out` (cleared first). Index i is the node
+  // counter's i-th value (in submission order): the timing model's walk reads
+  // it at the pool's base + i x poolNodeBytes(). Nothing for other algorithms.
+  virtual void listNodes(const uint32_t* words, uint32_t limit, std::vector<uint32_t>& out) const { out.clear(); }
   // Bytes of the pool per stored fragment (the A-buffer's node), 0 for the
   // bounded algorithms: the memory estimate and the banded reference use it.
   virtual uint64_t poolBytesPerFragment() const { return 0; }

@@ -33,6 +33,7 @@ json bottleneckJson(const std::vector<PartitionPhases>& parts, Cycle cycles, con
                {"dram_bus", share(w.dram_busy_cycles, w.dram_channels * double(cycles))}};
   if (w.l2_per_clock > 0) util["l2"] = share(w.l2_bytes, w.l2_per_clock * double(cycles));
   if (w.l3_per_clock > 0) util["l3"] = share(w.l3_bytes, w.l3_per_clock * double(cycles));
+  if (w.atomics_per_clock > 0) util["atomics"] = share(w.atomics, w.atomics_per_clock * double(cycles));
 
   // The phases of the partition that finished last (ties: the first).
   json phases = {{"opaque", 0}, {"transparent", json::array()}, {"resolve", 0}};

@@ -32,6 +32,8 @@ struct ResourceWork {
   // Shared levels (absent: per_clock 0): bytes through their slices' ports
   // (requested reads and writes, victims in) and what the ports move per clock.
   double l2_bytes = 0, l2_per_clock = 0, l3_bytes = 0, l3_per_clock = 0;
+  // The A-buffer's node counter (absent: per_clock 0): increments, and the GPU's rate.
+  double atomics = 0, atomics_per_clock = 0;
 };
 
 // timing.root_cause_cycles, .bound_by, .utilization and .phase_cycles for a

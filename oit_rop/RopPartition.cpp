@@ -52,7 +52,6 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
   payload_.set_data_ptr(dummy_data);
-  node_addr_ = setup.map.node_pool + (uint64_t(id) << 36);
   for (size_t i = 0; i < kStageCount; ++i) codes_ |= uint64_t(code(status_[i])) << (8 * i);
   if (cfg_.sim.engine == SimEngine::Approximate)
     approximate_ = std::make_unique<ApproximateEngine>(*this);
@@ -152,16 +151,11 @@ void RopPartition::opaquePhase() {
 }
 
 void RopPartition::nodeWrite() {
-  // Nodes are appended to the partition's pool region; consecutive appends
-  // coalesce into burst-sized DRAM writes.
-  node_pending_ += s_.node_bytes;
+  // The node goes where the counter points (NodePool): consecutive with the
+  // GPU's previous node; a burst is written once its last node is.
   res_.node_bytes_written += s_.node_bytes;
-  const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
-  while (node_pending_ >= burst) {
-    access(now_, node_addr_, burst, true, Surface::BlendArrays);
-    node_addr_ += burst;
-    node_pending_ -= burst;
-  }
+  const NodePool::Range r = s_.pool->append();
+  if (r.bytes()) access(now_, r.begin, r.bytes(), true, Surface::BlendArrays);
 }
 
 void RopPartition::waitForFrontEnd() {
@@ -176,8 +170,10 @@ void RopPartition::waitForFrontEnd() {
 // The A-buffer resolve's list walk over one tile (Yang et al. 2010): every
 // pixel follows its list from the head, each node's read waiting for the
 // previous node's pointer, so a list of n nodes is n dependent reads; the
-// tile's pixels walk side by side (one read per pixel and step, each node
-// scattered in the pool, a burst of its own). Then each pixel sorts what it
+// tile's pixels walk side by side (one read per pixel and step, of the node
+// at its place in the pool: NodePool::address of its index, so nodes allocated
+// together share lines and a pool that fits a cache level is read from it).
+// Then each pixel sorts what it
 // loaded (insertion sort, abuffer.sort_cycles_per_*; nodes past
 // abuffer.max_sorted spill at abuffer.spill_cycles_per_node, or are ignored
 // with truncate).
@@ -187,17 +183,20 @@ RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready)
   const uint32_t x0 = tx * geo_.tile_w, y0 = ty * geo_.tile_h;
   const uint32_t x1 = std::min(geo_.width, x0 + geo_.tile_w), y1 = std::min(geo_.height, y0 + geo_.tile_h);
   const ABufferConfig& ab = cfg_.abuffer;
-  walk_levels_.clear();
+  if (walk_nodes_.size() < size_t(geo_.tile_w) * geo_.tile_h) walk_nodes_.resize(size_t(geo_.tile_w) * geo_.tile_h);
+  size_t pixels = 0;
+  uint32_t longest = 0;
   ListWalk w;
   for (uint32_t y = y0; y < y1; ++y)
     for (uint32_t x = x0; x < x1; ++x) {
-      const model::ResolveWork rw = px.algo->resolveWork(px.words + (size_t(y) * px.width + x) * px.words_per_pixel);
+      const uint32_t* words = px.words + (size_t(y) * px.width + x) * px.words_per_pixel;
+      const model::ResolveWork rw = px.algo->resolveWork(words);
       // The algorithm's own budget decides (the CLI builds it from abuffer.*):
       // truncate walks and sorts max_sorted nodes, spill all of them.
       const uint32_t walked = rw.sorted;
       const uint32_t spilled = rw.sorted == rw.nodes ? rw.spilled : 0;
-      if (walk_levels_.size() < walked) walk_levels_.resize(walked, 0);
-      for (uint32_t i = 0; i < walked; ++i) ++walk_levels_[i];
+      px.algo->listNodes(words, walked, walk_nodes_[pixels++]);
+      longest = std::max(longest, walked);
       const Cycle sort = Cycle(rw.compares) * ab.sort_cycles_per_compare + Cycle(rw.moves) * ab.sort_cycles_per_move +
                          Cycle(spilled) * ab.spill_cycles_per_node;
       w.sort_cycles = std::max(w.sort_cycles, sort);
@@ -205,17 +204,13 @@ RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready)
       res_.sort_cycles += sort;
     }
   // Step i reads the i-th node of every pixel whose list is that long, once
-  // step i - 1's reads are back; each read is its own burst at a scattered
-  // address of the pool.
-  const uint32_t burst = std::max(1u, cfg_.dram.burst_bytes);
-  const uint64_t pool_span = uint64_t(1) << 35;
+  // step i - 1's reads are back.
   Cycle t = heads_ready;
-  for (size_t i = 0; i < walk_levels_.size(); ++i) {
+  for (uint32_t i = 0; i < longest; ++i) {
     Cycle step = t;
-    for (uint32_t j = 0; j < walk_levels_[i]; ++j) {
-      const uint64_t h = (uint64_t(tile) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(i) << 20 | j) * 0xBF58476D1CE4E5B9ull;
-      const uint64_t addr = s_.map.node_pool + ((h >> 16) % pool_span) / burst * burst;
-      step = std::max(step, access(t, addr, std::min(burst, s_.node_bytes), false, Surface::BlendArrays));
+    for (size_t j = 0; j < pixels; ++j) {
+      if (walk_nodes_[j].size() <= i) continue;
+      step = std::max(step, access(t, s_.pool->address(walk_nodes_[j][i]), s_.node_bytes, false, Surface::BlendArrays));
       res_.node_bytes_read += s_.node_bytes;
     }
     res_.list_walk_cycles += step - t;
@@ -227,10 +222,9 @@ RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready)
 
 void RopPartition::resolvePhase() {
   setAll(StageStatus::idle());
-  if (node_pending_) {  // flush the node write-combiner
-    access(now_, node_addr_, uint32_t(node_pending_), true, Surface::BlendArrays);
-    node_addr_ += node_pending_;
-    node_pending_ = 0;
+  if (s_.pool) {  // the nodes of a burst not yet complete
+    const NodePool::Range r = s_.pool->flush();
+    if (r.bytes()) access(now_, r.begin, r.bytes(), true, Surface::BlendArrays);
   }
   // Fast clear: tiles no fragment wrote keep their clear state; their colour
   // is already the opaque/clear colour, so they are neither read nor resolved.

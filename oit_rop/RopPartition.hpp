@@ -27,6 +27,7 @@
 #include "oit_rop/memory/DramSystem.hpp"
 #include "oit_rop/stages/EarlyDepth.hpp"
 #include "oit_rop/stages/NodeCounter.hpp"
+#include "oit_rop/stages/NodePool.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/stages/PixelLock.hpp"
 #include "oit_rop/stages/ShaderInput.hpp"
@@ -58,6 +59,7 @@ struct PartitionSetup {
   bool bounded = true;       // false: A-buffer node pool traffic
   unsigned node_bytes = 12;  // A-buffer: one pool node (OitAlgorithm::poolNodeBytes)
   NodeCounter* counter = nullptr;  // A-buffer: the GPU's node counter (shared by all partitions)
+  NodePool* pool = nullptr;        // A-buffer: where its nodes are (shared by all partitions)
 };
 
 struct PartitionResult {
@@ -261,9 +263,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   WaitSplit last_depth_;      // the latest depth-tile read's wait
   RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
-  // A-buffer node pool (write-combined 12 B nodes, burst-sized writes).
-  uint64_t node_pending_ = 0, node_addr_ = 0;
-  std::vector<uint32_t> walk_levels_;  // walkLists: pixels of the tile with a list at least i + 1 long
+  std::vector<std::vector<uint32_t>> walk_nodes_;  // walkLists: each pixel's list (pool indices) in walk order
   Cycle last_write_done_ = 0;
   MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;

@@ -235,9 +235,12 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   setup.node_bytes = algo.poolNodeBytes();
   // The A-buffer's global node counter: one atomic unit for every partition.
   std::unique_ptr<NodeCounter> counter;
+  std::unique_ptr<NodePool> pool;
   if (!algo.bounded()) {
     counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency);
     setup.counter = counter.get();
+    pool = std::make_unique<NodePool>(map.node_pool, algo.poolNodeBytes(), cfg.dram.burst_bytes);
+    setup.pool = pool.get();
   }
 
   const CoreClock clock(cfg.clock.core_mhz);
@@ -438,6 +441,10 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   if (top->l3()) {
     work.l3_bytes = port_bytes(top->l3()->stats());
     work.l3_per_clock = cfg.l3.bytes_per_clock * cfg.l3.slices;
+  }
+  if (counter) {
+    work.atomics = double(counter->atomics());
+    work.atomics_per_clock = cfg.abuffer.atomics_per_clock;
   }
   timing.update(bottleneckJson(phases, cycles, work));
   const double mean_gbps = frame_us > 0 ? bytes_total / (frame_us * 1e-6) / 1e9 : 0.0;

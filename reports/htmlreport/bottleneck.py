@@ -41,7 +41,7 @@ def bottleneck_table(points, configs):
     has_l2 = any(data.level_hit_rate(m, "l2") is not None for m in ms)
     has_toc = any(data.num(m, "memory.traffic_over_compulsory") is not None for m in ms)
     has_bound = any(isinstance(m.get("timing.bound_by.resource"), str) for m in ms)
-    headers = ["algorithm", "frame (us)", "opaque (us)", "transparent (us)", "resolve (us)",
+    headers = ["algorithm", "frame (us)", "opaque (us)", "transparent (us; passes)", "resolve (us)",
                "bound by (share of frame)" if has_bound else "largest stall (share of frame)",
                "DRAM mean / peak (GB/s)", "DRAM utilisation", "cache hit rate"]
     if has_l2:
@@ -49,7 +49,7 @@ def bottleneck_table(points, configs):
     if has_toc:
         headers.append("traffic / compulsory")
     out = [("<p class='note'>Frame phases from the partition that finished last (opaque pre-pass, the transparent "
-            "pass(es), the resolve). " + ("Bound by: the timing model's <code>timing.bound_by</code>. " if has_bound else
+            "pass(es), the resolve; a two-pass algorithm's passes each in brackets). " + ("Bound by: the timing model's <code>timing.bound_by</code>. " if has_bound else
             "Largest stall: the per-stage stall cycles (summed over partitions, as a share of cycles x partitions) "
             "of the stage and cause that stall most, waiting for upstream (<code>input_starved</code>) left out; "
             "the timing model's own <code>bound_by</code> replaces it when reports carry it. ") +
@@ -60,7 +60,11 @@ def bottleneck_table(points, configs):
         for p in _order([p for p in points if configs.label(p) == conf], configs):
             m = p["metrics"]
             ph = data.phases_us(m) or []
-            transparent = sum(v for n, v in ph if n.startswith("transparent")) if ph else None
+            passes = [v for n, v in ph if n.startswith("transparent")]
+            transparent = sum(passes) if ph else None
+            # A two-pass algorithm's passes each (adaptive: build, composite), summed in the sort value.
+            transparent_text = (f"{fmt_num(transparent)} ({' + '.join(fmt_num(v) for v in passes)})"
+                                if len(passes) > 1 else None)
             phase = dict(ph)
             b = data.bound_by(m)
             bound = (f"{esc(b[0])} {fmt_pct(b[1])}" + ("" if b[2] == "bound_by" else
@@ -68,7 +72,8 @@ def bottleneck_table(points, configs):
             util = data.dram_utilisation(m)
             mean, peak = data.num(m, "memory.mean_gbps"), data.num(m, "memory.peak_gbps")
             r = [cell(data.algo_label(p), esc(data.algo_label(p)), "t"),
-                 cell(data.frame_us(m)), cell(phase.get("opaque")), cell(transparent), cell(phase.get("resolve")),
+                 cell(data.frame_us(m)), cell(phase.get("opaque")), cell(transparent, transparent_text),
+                 cell(phase.get("resolve")),
                  cell(b[1] if b else None, bound, "t"),
                  cell(mean, f"{fmt_num(mean)} / {fmt_num(peak)}" if mean is not None else ""),
                  shaded(util), cell(data.num(m, "cache.hit_rate"), fmt_pct(data.num(m, "cache.hit_rate")))]

@@ -71,13 +71,15 @@ print(data.level_hit_rate(m, "l2"))
 from htmlreport import bottleneck
 p = {"id": "0000-t-mlab", "trace": "t", "axes": {}, "metrics": m, "status": "ok"}
 html = bottleneck.bottleneck_table([p], data.Configs([p]))
-for s in ["bound by (share of frame)", "L2 hit rate", "traffic / compulsory", "dram_bus 72.0 %", "62.5 %", "3.50 x"]:
+for s in ["bound by (share of frame)", "L2 hit rate", "traffic / compulsory", "dram_bus 72.0 %", "62.5 %", "3.50 x",
+          '<td data-v="10.0">10 (4 + 6)</td>']:
     print(s in html)
 )py");
+  // The transparent column: both passes (2000 and 3000 cycles at 500 MHz: 4 and 6 us), sorted by their sum.
   EXPECT_EQ(out, "[('opaque', 1.0), ('transparent pass 1', 4.0), ('transparent pass 2', 6.0), ('resolve', 1.0)]\n"
                  "('dram_bus', 0.72, 'bound_by')\n"
                  "0.625\n"
-                 "True\nTrue\nTrue\nTrue\nTrue\nTrue\n");
+                 "True\nTrue\nTrue\nTrue\nTrue\nTrue\nTrue\n");
 }
 
 // Hardware configurations are told apart by preset and the parameters that

@@ -107,8 +107,13 @@ TEST_P(EveryAlgorithm, ImageBitIdenticalToFunctionalAlsoWithEverySkipOff) {
   EXPECT_EQ(off["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
   EXPECT_GT(on["timing"]["skipped_idle_cycles"].get<uint64_t>(), 0u);
   // Not an invariant of the model (DRAM scheduling could reorder), but on this
-  // scene every skip removes work: the frame is not shorter without them.
-  EXPECT_GE(off["timing"]["cycles"].get<uint64_t>(), on["timing"]["cycles"].get<uint64_t>());
+  // scene every skip removes work: the frame is not shorter without them. The
+  // A-buffer's two partitions append to one node pool (NodePool) in the order
+  // they blend, which the skips change, and so where its nodes land and what
+  // the walk's reads find in the DRAM rows: measured 153,710 cycles without
+  // the skips against 155,079 with them (-0.9 %); within 2 % either way.
+  const double slack = GetParam() == "abuffer" ? 0.98 : 1.0;
+  EXPECT_GE(off["timing"]["cycles"].get<double>(), slack * on["timing"]["cycles"].get<double>());
 }
 
 INSTANTIATE_TEST_SUITE_P(TimingRun, EveryAlgorithm, ::testing::ValuesIn(allAlgorithmNames()), paramName);
@@ -214,14 +219,14 @@ TEST(TimingRun, SkippingIdleCyclesDoesNotChangeTiming) {
   }
 }
 
-// The DRAM bank hash keeps the A-buffer's frame nearly independent of how
-// finely the partitions interleave (sim.quantum_cycles): its per-partition node
-// pools, regions 2^36 B apart, met in one bank on different rows with the plain
-// map, so lockstep partitions (quantum 1) reopened a row at every switch. The
-// DRAM controller's write queue has the same effect: it drains the node
-// writes in batches grouped by row, so with batching the plain map is as
-// insensitive; written one by one (dram.write_high = 1) it is not.
-TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
+// The A-buffer's frame is nearly independent of how finely the partitions
+// interleave (sim.quantum_cycles), with or without the DRAM bank hash and the
+// write queue's batches. (When each partition had its own node pool, regions
+// 2^36 B apart, they met in one bank on different rows: with the plain map
+// and writes one by one, lockstep partitions reopened a row at every switch,
+// +45 %. One pool, node i at base + i x node bytes whichever partition
+// writes it (NodePool), leaves no such pair of regions.)
+TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantum) {
   // Particles: 300 transparent 16x16 quads at random places and depths over an
   // opaque backdrop (long node lists per tile, as gen's particles scene).
   std::vector<Fragment> fs;
@@ -253,9 +258,7 @@ TEST(TimingRun, AbufferFrameBarelyDependsOnTheQuantumWithTheBankHash) {
   const double one_by_one_lockstep = cycles(1, false, false), one_by_one = cycles(200, false, false);
   EXPECT_LT(std::abs(hashed - hashed_lockstep) / hashed_lockstep, 0.02);
   EXPECT_LT(std::abs(plain - plain_lockstep) / plain_lockstep, 0.02);
-  // The effect the hash and the batches remove (+45 % here; 3x before the
-  // resolve walked its lists and sorted, which the quantum does not change).
-  EXPECT_GT(std::abs(one_by_one - one_by_one_lockstep) / one_by_one_lockstep, 0.3);
+  EXPECT_LT(std::abs(one_by_one - one_by_one_lockstep) / one_by_one_lockstep, 0.02);
 }
 
 // Per-draw totals (report.json per_draw) counted independently from the scene:
@@ -316,9 +319,10 @@ TEST(TimingRun, FootprintFollowsThePublishedFormulas) {
 
 // The resolve of a tile starts when its inputs are there: for the A-buffer the
 // tile's node lists, walked with dependent reads (each node of an fp32 pool
-// 24 B, read once, each its own 64 B burst at a scattered address). One 8x8
-// tile with 40 layers (2560 nodes) behind a 0.5 GB/s channel: the bursts alone
-// take 2560 x 64 / (0.5 GB/s / 1150 MHz) = 376 832 cycles of bus, all of which
+// 24 B, read once, no shared level: each read its own DRAM access, and a
+// partial burst takes a whole burst's bus time). One 8x8 tile with 40 layers
+// (2560 nodes) behind a 0.5 GB/s channel: the bursts alone take at least
+// 2560 x 64 / (0.5 GB/s / 1150 MHz) = 376 832 cycles of bus, all of which
 // the resolve waits ("cache_miss_wait"). Then each pixel sorts its 40 nodes:
 // submitted front to back, the list runs back to front, so node i moves past
 // all i sorted ones (i compares, i moves, reaching the front): 780 + 780 = 1560
