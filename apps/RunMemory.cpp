@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include "oit_rop/memory/CacheLevel.hpp"
 #include <malloc.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include <stdexcept>
 
 #include "apps/Progress.hpp"
+#include "model/FunctionalRenderer.hpp"
 
 namespace oit::cli {
 
@@ -74,21 +74,6 @@ void returnLargeBlocksToTheSystem() {
 #ifdef __GLIBC__
   mallopt(M_MMAP_THRESHOLD, 256 * 1024);  // a fixed threshold also stops the adjustment
 #endif
-}
-
-uint64_t residentBytes() {
-  unsigned long size = 0, resident = 0;
-  FILE* f = std::fopen("/proc/self/statm", "r");
-  if (!f) return 0;
-  const int n = std::fscanf(f, "%lu %lu", &size, &resident);
-  std::fclose(f);
-  return n == 2 ? uint64_t(resident) * uint64_t(::sysconf(_SC_PAGESIZE)) : 0;
-}
-
-uint64_t peakResidentBytes() {
-  struct rusage ru {};
-  if (::getrusage(RUSAGE_SELF, &ru) != 0) return 0;
-  return uint64_t(ru.ru_maxrss) * 1024;  // KiB on Linux
 }
 
 MemoryBudget parseMemoryBudget(const std::string& text) {
@@ -269,5 +254,17 @@ std::string outOfMemoryMessage(const RunMemoryEstimate& e, const MemoryBudget& b
       trace, s.width, s.height, algo, s.timing ? "timing" : "functional", gib(e.peak()), e.peakPhase().name,
       gib(budget.bytes), budget.source);
 }
+
+uint64_t transparentFragments(FragmentSource& src) {
+  const model::DrawClassifier classes(src.header());
+  src.rewind();
+  uint64_t n = 0;
+  model::DrawRun draws(classes);
+  for (auto b = src.next(); !b.empty(); b = src.next())
+    for (const Fragment& f : b) n += draws.isOpaque(f.draw) ? 0 : 1;
+  src.rewind();
+  return n;
+}
+
 
 }  // namespace oit::cli
