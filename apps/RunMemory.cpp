@@ -132,12 +132,16 @@ constexpr uint64_t kReaderBytes = 3 * kMiB;
 // The timing model's tables beyond the per-pixel state it shares with the
 // functional mode (the ordered lock's release table, per-tile cache, depth and
 // HiZ entries, the partitions' queues, the DRAM controller's queues, SystemC's
-// thread stacks). Measured with --reference none at 1024 x 512 and 2048 x 1024
-// (timing minus functional peak, glass): alpha 4 and 12 MiB (5.3 B per pixel +
-// 1.3 MiB), mlab k=8 7 and 21 MiB (9.3 B per pixel + 2.3 MiB). 7 B per pixel +
-// 2 MiB lies between them; the functional terms' own margin covers mlab's
-// rest (CliReliability.EstimateCoversTheMeasuredPeak).
-constexpr uint64_t kTimingBytesPerPixel = 7;
+// thread stacks): they grow with the frame's state. Measured on commit
+// 16a4d90's tree as timing minus functional peak with --reference none and no
+// shared levels (--set l2.size_bytes=0 --set l3.size_bytes=0), glass at
+// 1280 x 720: alpha (16 B of state per pixel) 13.6 B per pixel, wboit (20)
+// 14.8, mlab k=2 (40) 22.8, k=4 (64) 38.7, k=8 (160) 71.7; mlab k=4 at
+// 640 x 360 and 2560 x 1440 gives the same per pixel (+1 MiB). 8 B + half the
+// state per pixel covers each (the 7 B per pixel measured before the memory
+// hierarchy's tables fell 23 MiB short at 1280 x 720 with mlab k=4).
+constexpr uint64_t kTimingBytesPerPixel = 8;
+constexpr double kTimingShareOfState = 0.5;
 constexpr uint64_t kTimingBytes = 2 * kMiB;
 // The exact reference beside its band: the band file's write buffers and one
 // read chunk (FunctionalRendererBands.cpp).
@@ -186,7 +190,9 @@ RunMemoryEstimate estimateRunMemory(const RunShape& s, uint64_t base, uint64_t b
   // The run: opaque layer, per-pixel state, pool, its image; the timing
   // model's own tables.
   uint64_t render = opaque + s.bytes_per_pixel * px + pool + image + kReaderBytes;
-  if (s.timing) render += kTimingBytesPerPixel * px + kTimingBytes + s.timing_level_bytes;
+  if (s.timing)
+    render += (kTimingBytesPerPixel + uint64_t(kTimingShareOfState * double(s.bytes_per_pixel))) * px + kTimingBytes +
+              s.timing_level_bytes;
   // --seeds N: children simulate (each a whole run, in its own process, a
   // fork of this one) and send back their images, which this process keeps to
   // the end (and seed 0's once more as the run's own); flicker's sRGB8 codes
