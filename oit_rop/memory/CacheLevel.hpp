@@ -108,26 +108,36 @@ class CacheLevel final : public MemoryPort {
   bool resident(uint64_t addr) const;  // the line holding addr is in the cache (any sector)
 
  private:
-  // All zero = an invalid line, so the tag store can be allocated zeroed by
-  // the system (calloc): the pages of sets never used are never touched (a
-  // 128 MB level has 2 M lines; a frame uses a fraction of them).
+  // A way's state apart from its tag and LRU stamp, which live in arrays of
+  // their own (tags_, stamps_): a lookup compares a set's tags, 8 B per way,
+  // so a 16-way set of a 128 MB level is 2 host cache lines instead of the 10
+  // of whole records (the l3's lookups were most of the engines' time,
+  // bench/RESULTS-timing.md session 17). All zero = an invalid way, so each
+  // array can be allocated zeroed by the system (calloc): the pages of sets
+  // never used are never touched (a 128 MB level has 2 M lines; a frame uses
+  // a fraction of them).
   struct Line {
-    uint64_t tag1 = 0;      // line number (address / line_bytes) + 1; 0 = invalid
-    uint64_t stamp = 0;     // LRU
-    Cycle ready = 0;        // its last fill's data is there
+    Cycle ready = 0;  // its last fill's data is there
     uint32_t valid = 0, dirty = 0;
     Surface surface = Surface::BlendArrays;  // of its last writer (write-backs count by it)
   };
+  static constexpr size_t kNoWay = ~size_t(0);
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
-  uint32_t setIndex(uint64_t line) const;          // the line's set inside its slice
-  Line* setOfLine(uint64_t line, unsigned& slice);  // the ways of the line's set, and its slice
-  // The way holding `line` in its set, or null.
-  Line* find(Line* set, uint64_t line);
+  uint32_t setIndex(uint64_t line) const;            // the line's set inside its slice
+  size_t setOfLine(uint64_t line, unsigned& slice) const;  // the index of the line's set's first way, and its slice
+  // The way (index) holding `line` in the set whose first way is `set`, or kNoWay.
+  size_t find(size_t set, uint64_t line) const {
+    const uint64_t* const t = tags_.get() + set;
+    for (unsigned w = 0; w < cfg_.ways; ++w)
+      if (t[w] == line + 1) return set + w;
+    return kNoWay;
+  }
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
-  Line& allocate(Cycle now, Line* set, uint64_t line);
-  void evict(Cycle now, Line& l);
+  size_t allocate(Cycle now, size_t set, uint64_t line);
+  void evict(Cycle now, size_t way);
+  void touchLru(size_t way) { stamps_[way] = ++stamp_; }
   // Port booking: the slice's port moves `bytes` from `now` on, in the
   // earliest capacity free (PortCalendar); returns the cycle the transfer
   // starts, `end` the cycle it is done.
@@ -143,7 +153,7 @@ class CacheLevel final : public MemoryPort {
   // contiguous group); returns their completion.
   Cycle fetch(Cycle at, uint64_t line, uint32_t mask, Surface s);
   void classify(uint64_t line, uint32_t sectors, bool missed);
-  void dirtyRuns(const Line& l, std::vector<DirtyRange>& out) const;  // a line's dirty sectors, in runs
+  void dirtyRuns(size_t way, std::vector<DirtyRange>& out) const;  // a way's dirty sectors, in runs
 
   std::string name_;
   SharedCacheConfig cfg_;
@@ -153,7 +163,10 @@ class CacheLevel final : public MemoryPort {
   unsigned line_shift_ = 0;  // log2(line_bytes)
   int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
   bool sets_pow2_ = false;
-  std::unique_ptr<Line[], FreeDeleter> lines_;  // slice-major: (slice x sets + set) x ways + way; calloc'd
+  // Per way, slice-major ((slice x sets + set) x ways + way), each calloc'd:
+  std::unique_ptr<uint64_t[], FreeDeleter> tags_;    // line number (address / line_bytes) + 1; 0 = invalid
+  std::unique_ptr<uint64_t[], FreeDeleter> stamps_;  // LRU: the larger, the more recently used
+  std::unique_ptr<Line[], FreeDeleter> lines_;
   size_t line_count_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice
