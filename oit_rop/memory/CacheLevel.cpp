@@ -206,12 +206,12 @@ uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classi
 unsigned CacheLevel::sliceOf(uint64_t addr) const { return sliceHash(addr >> line_shift_, cfg_.slices); }
 uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_shift_); }
 
-uint32_t CacheLevel::setIndex(uint64_t line) const {
+[[gnu::always_inline]] inline uint32_t CacheLevel::setIndex(uint64_t line) const {
   const uint64_t in_slice = slice_shift_ >= 0 ? line >> slice_shift_ : line / cfg_.slices;
   return uint32_t(sets_pow2_ ? in_slice & (sets_ - 1) : in_slice % sets_);
 }
 
-size_t CacheLevel::setOfLine(uint64_t line, unsigned& slice) const {
+[[gnu::always_inline]] inline size_t CacheLevel::setOfLine(uint64_t line, unsigned& slice) const {
   slice = sliceHash(line, cfg_.slices);
   return (size_t(slice) * sets_ + setIndex(line)) * cfg_.ways;
 }
@@ -282,8 +282,7 @@ Cycle CacheLevel::fetch(Cycle at, uint64_t line, uint32_t mask, Surface s) {
   return done;
 }
 
-void CacheLevel::classify(uint64_t line, uint32_t sectors, bool missed) {
-  if (!classes_) return;
+void CacheLevel::classifyMiss(uint64_t line, uint32_t sectors, bool missed) {
   const MissClassifier::Kind k = classes_->access(line, sectors);
   if (!missed) return;
   switch (k) {

@@ -152,7 +152,10 @@ class CacheLevel final : public MemoryPort {
   // Reads the sectors `mask` of `line` from the level below (a run per
   // contiguous group); returns their completion.
   Cycle fetch(Cycle at, uint64_t line, uint32_t mask, Surface s);
-  void classify(uint64_t line, uint32_t sectors, bool missed);
+  void classify(uint64_t line, uint32_t sectors, bool missed) {  // inline: off by default, a test per line
+    if (classes_) classifyMiss(line, sectors, missed);
+  }
+  void classifyMiss(uint64_t line, uint32_t sectors, bool missed);
   void dirtyRuns(size_t way, std::vector<DirtyRange>& out) const;  // a way's dirty sectors, in runs
 
   std::string name_;
