@@ -181,10 +181,11 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle loo
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
   line_count_ = size_t(cfg.slices) * sets_ * cfg.ways;
-  tags_.reset(static_cast<uint64_t*>(std::calloc(line_count_, sizeof(uint64_t))));
-  stamps_.reset(static_cast<uint64_t*>(std::calloc(line_count_, sizeof(uint64_t))));
-  lines_.reset(static_cast<Line*>(std::calloc(line_count_, sizeof(Line))));
-  if (!tags_ || !stamps_ || !lines_) throw std::bad_alloc();
+  block_bytes_ = size_t(cfg.ways) * (2 * sizeof(uint64_t) + sizeof(Line));
+  way_shift_ = unsigned(std::bit_width(cfg.ways - 1u));
+  way_mask_ = (size_t(1) << way_shift_) - 1;
+  store_.reset(static_cast<unsigned char*>(std::calloc(size_t(cfg.slices) * sets_, block_bytes_)));
+  if (!store_) throw std::bad_alloc();
   set_used_.assign((size_t(cfg.slices) * sets_ + 63) / 64, 0);
   ports_.assign(cfg.slices, PortCalendar(cfg.bytes_per_clock, lookback));
   if (classify_misses) classes_ = std::make_unique<MissClassifier>(cfg.size_bytes / cfg.line_bytes);
@@ -213,7 +214,7 @@ uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_s
 
 [[gnu::always_inline]] inline size_t CacheLevel::setOfLine(uint64_t line, unsigned& slice) const {
   slice = sliceHash(line, cfg_.slices);
-  return (size_t(slice) * sets_ + setIndex(line)) * cfg_.ways;
+  return (size_t(slice) * sets_ + setIndex(line)) << way_shift_;
 }
 
 bool CacheLevel::resident(uint64_t addr) const {
@@ -222,9 +223,9 @@ bool CacheLevel::resident(uint64_t addr) const {
 }
 
 void CacheLevel::evict(Cycle now, size_t way) {
-  if (tags_[way] == 0) return;
-  Line& l = lines_[way];
-  const uint64_t addr = (tags_[way] - 1) * cfg_.line_bytes;
+  if (tag(way) == 0) return;
+  Line& l = record(way);
+  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
   const unsigned si = unsigned(l.surface);
   if (victim_sink_) {
     // A victim level below takes every eviction, clean or dirty.
@@ -240,24 +241,24 @@ void CacheLevel::evict(Cycle now, size_t way) {
     });
   }
   l = Line{};
-  tags_[way] = 0;
-  stamps_[way] = 0;
+  tag(way) = 0;
+  stamp(way) = 0;
 }
 
 size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
-  const size_t set_no = set / cfg_.ways;
+  const size_t set_no = set >> way_shift_;
   set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
   // The first invalid way, else the least recently used (the first of equal stamps).
   size_t victim = set;
   for (unsigned w = 0; w < cfg_.ways; ++w) {
-    if (tags_[set + w] == 0) {
+    if (tag(set + w) == 0) {
       victim = set + w;
       break;
     }
-    if (stamps_[set + w] < stamps_[victim]) victim = set + w;
+    if (stamp(set + w) < stamp(victim)) victim = set + w;
   }
   evict(now, victim);
-  tags_[victim] = line + 1;
+  tag(victim) = line + 1;
   return victim;
 }
 
@@ -310,7 +311,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     const Cycle after_lookup = start + cfg_.hit_latency;
     ++stats_.accesses[si];
     size_t way = find(set, line);
-    Line* l = way != kNoWay ? &lines_[way] : nullptr;
+    Line* l = way != kNoWay ? &record(way) : nullptr;
     if (!write) {
       const uint32_t missing = l ? any & ~l->valid : any;
       classify(line, any, missing != 0);
@@ -328,7 +329,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       if (!l && cfg_.victim_only) continue;
       if (!l) {
         way = allocate(start, set, line);
-        l = &lines_[way];
+        l = &record(way);
         l->surface = s;
       }
       l->valid |= missing;
@@ -352,7 +353,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     }
     if (!l) {
       way = allocate(start, set, line);
-      l = &lines_[way];
+      l = &record(way);
     }
     const uint32_t partial = any & ~whole & ~l->valid;
     if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
@@ -402,9 +403,9 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
         continue;
       }
       way = allocate(start, set, line);
-      lines_[way].surface = s;
+      record(way).surface = s;
     }
-    Line* const l = &lines_[way];
+    Line* const l = &record(way);
     if (classes_) {
       if (has_pending && line != pending_line) flush();
       pending_line = line;
@@ -429,14 +430,14 @@ void CacheLevel::dirtyRanges(std::vector<DirtyRange>& out) const {
   for (size_t word = 0; word < set_used_.size(); ++word)
     for (uint64_t bits = set_used_[word]; bits != 0; bits &= bits - 1) {
       const size_t set = word * 64 + size_t(std::countr_zero(bits));
-      for (unsigned w = 0; w < cfg_.ways; ++w) dirtyRuns(set * cfg_.ways + w, out);
+      for (unsigned w = 0; w < cfg_.ways; ++w) dirtyRuns((set << way_shift_) + w, out);
     }
 }
 
 void CacheLevel::dirtyRuns(size_t way, std::vector<DirtyRange>& out) const {
-  if (tags_[way] == 0) return;
-  const Line& l = lines_[way];
-  const uint64_t addr = (tags_[way] - 1) * cfg_.line_bytes;
+  if (tag(way) == 0) return;
+  const Line& l = record(way);
+  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
   forEachRun(l.dirty, [&](uint32_t s, uint32_t e) {
     out.push_back({addr + uint64_t(s) * sector_bytes_, (e - s) * sector_bytes_, l.surface});
   });

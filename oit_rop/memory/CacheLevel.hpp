@@ -108,14 +108,16 @@ class CacheLevel final : public MemoryPort {
   bool resident(uint64_t addr) const;  // the line holding addr is in the cache (any sector)
 
  private:
-  // A way's state apart from its tag and LRU stamp, which live in arrays of
-  // their own (tags_, stamps_): a lookup compares a set's tags, 8 B per way,
-  // so a 16-way set of a 128 MB level is 2 host cache lines instead of the 10
-  // of whole records (the l3's lookups were most of the engines' time,
-  // bench/RESULTS-timing.md session 17). All zero = an invalid way, so each
-  // array can be allocated zeroed by the system (calloc): the pages of sets
-  // never used are never touched (a 128 MB level has 2 M lines; a frame uses
-  // a fraction of them).
+  // A way's state apart from its tag and LRU stamp. A set is one block of
+  // the tag store: its ways' tags, then their stamps, then these records, so
+  // a lookup compares the set's tags, 8 B per way (a 16-way set of a 128 MB
+  // level is 2 host cache lines instead of the 10 of whole records: the l3's
+  // lookups were most of the engines' time, bench/RESULTS-timing.md session
+  // 17), while a set still occupies one stretch of memory (three arrays
+  // touched a page each per set: +1 MB of resident memory on a 1024x512
+  // frame). All zero = an invalid way, so the store can be allocated zeroed
+  // by the system (calloc): the pages of sets never used are never touched (a
+  // 128 MB level has 2 M lines; a frame uses a fraction of them).
   struct Line {
     Cycle ready = 0;  // its last fill's data is there
     uint32_t valid = 0, dirty = 0;
@@ -125,11 +127,19 @@ class CacheLevel final : public MemoryPort {
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
+  // A way is named by (set number << way_shift_) + way in the set; a set by
+  // its way 0.
   uint32_t setIndex(uint64_t line) const;            // the line's set inside its slice
-  size_t setOfLine(uint64_t line, unsigned& slice) const;  // the index of the line's set's first way, and its slice
-  // The way (index) holding `line` in the set whose first way is `set`, or kNoWay.
+  size_t setOfLine(uint64_t line, unsigned& slice) const;  // the line's set (its way 0), and its slice
+  uint64_t* tagsOf(size_t way) const {  // the tags of the way's set (then its stamps, then its records)
+    return reinterpret_cast<uint64_t*>(store_.get() + (way >> way_shift_) * block_bytes_);
+  }
+  uint64_t& tag(size_t way) const { return tagsOf(way)[way & way_mask_]; }  // line number + 1; 0 = invalid
+  uint64_t& stamp(size_t way) const { return tagsOf(way)[cfg_.ways + (way & way_mask_)]; }  // LRU: larger = more recent
+  Line& record(size_t way) const { return reinterpret_cast<Line*>(tagsOf(way) + 2 * size_t(cfg_.ways))[way & way_mask_]; }
+  // The way holding `line` in the set `set`, or kNoWay.
   size_t find(size_t set, uint64_t line) const {
-    const uint64_t* const t = tags_.get() + set;
+    const uint64_t* const t = tagsOf(set);
     for (unsigned w = 0; w < cfg_.ways; ++w)
       if (t[w] == line + 1) return set + w;
     return kNoWay;
@@ -137,7 +147,7 @@ class CacheLevel final : public MemoryPort {
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
   size_t allocate(Cycle now, size_t set, uint64_t line);
   void evict(Cycle now, size_t way);
-  void touchLru(size_t way) { stamps_[way] = ++stamp_; }
+  void touchLru(size_t way) { stamp(way) = ++stamp_; }
   // Port booking: the slice's port moves `bytes` from `now` on, in the
   // earliest capacity free (PortCalendar); returns the cycle the transfer
   // starts, `end` the cycle it is done.
@@ -166,10 +176,11 @@ class CacheLevel final : public MemoryPort {
   unsigned line_shift_ = 0;  // log2(line_bytes)
   int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
   bool sets_pow2_ = false;
-  // Per way, slice-major ((slice x sets + set) x ways + way), each calloc'd:
-  std::unique_ptr<uint64_t[], FreeDeleter> tags_;    // line number (address / line_bytes) + 1; 0 = invalid
-  std::unique_ptr<uint64_t[], FreeDeleter> stamps_;  // LRU: the larger, the more recently used
-  std::unique_ptr<Line[], FreeDeleter> lines_;
+  // The tag store: a block of block_bytes_ per set, slice-major (slice x sets + set); calloc'd.
+  std::unique_ptr<unsigned char[], FreeDeleter> store_;
+  size_t block_bytes_ = 0;  // ways x (tag + stamp + Line)
+  unsigned way_shift_ = 0;  // log2 of ways rounded up to a power of two
+  size_t way_mask_ = 0;
   size_t line_count_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice
