@@ -37,6 +37,7 @@
 #include "reports/JsonReport.hpp"
 #include "traces/TempFiles.hpp"
 #include "traces/TraceIO.hpp"
+#include "traces/UnmodelledDraws.hpp"
 
 namespace oit::cli {
 namespace {
@@ -294,6 +295,15 @@ void runReplay(RunArgs& a) {
                     {"stored", c.stored},         {"merged", c.merged},   {"discarded", c.discarded},
                     {"dropped_pool_full", algo->bounded() ? 0 : c.discarded},
                     {"outcomes_sum_to_in", c.balanced()}, {"passes", passes}};
+  // Draws of blend modes the model does not blend (v2): counted, not replayed.
+  const UnmodelledDraws unmodelled = unmodelledDraws(h.draws);
+  nlohmann::json by_mode = nlohmann::json::object();
+  for (size_t mode = 0; mode < UnmodelledDraws::kModes; ++mode)
+    if (unmodelled.draws_by_mode[mode])
+      by_mode[toString(static_cast<BlendMode>(mode))] = {{"draws", unmodelled.draws_by_mode[mode]},
+                                                         {"fragments", unmodelled.fragments_by_mode[mode]}};
+  j["fragments"]["not_modelled"] = {
+      {"draws", unmodelled.draws}, {"fragments", unmodelled.fragments}, {"by_blend_mode", by_mode}};
   j["memory"] = {{"bytes_per_pixel", algo->bytesPerPixel()},
                  {"state_bytes", run.result.state_bytes},
                  {"state_read_bytes", c.bytes_read},
@@ -361,6 +371,9 @@ void runReplay(RunArgs& a) {
              timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
+  if (unmodelled.draws)
+    fmt::print("not modelled {}; blend modes the model does not blend: their fragments are in no record, not in the "
+               "image nor the reference\n", unmodelled.describe());
   // The inserts' read-modify-writes at the ROP, not DRAM traffic (that is the
   // timing summary's dram line); the A-buffer's pool nodes count at
   // poolNodeBytes() each, as in the footprint.
