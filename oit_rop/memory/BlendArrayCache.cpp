@@ -61,6 +61,7 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, const TileLines& lines,
   written_.assign(line_of_.size(), 0);
   tile_touched_.assign(tiles, 0);
   miss_queue_.assign(cfg.miss_queue, 0);
+  miss_sorted_.assign(2 * size_t(cfg.miss_queue), 0);
   if (classify_) {
     fa_prev_.assign(line_of_.size(), kInvalid);
     fa_next_.assign(line_of_.size(), kInvalid);
@@ -70,7 +71,6 @@ BlendArrayCache::BlendArrayCache(const CacheConfig& cfg, const TileLines& lines,
   }
   // (A fragment asks for every line it touches at once: one per line at most.)
   scratch_index_.reserve(64);
-  scratch_busy_.reserve(cfg.miss_queue);
 }
 
 BlendArrayCache::~BlendArrayCache() = default;
@@ -114,9 +114,140 @@ void BlendArrayCache::classifyAccess(uint32_t ll, uint32_t sectors, bool missed)
   else ++stats_.capacity_misses;
 }
 
+bool BlendArrayCache::missQueueRefuses(Cycle now, uint32_t misses, uint32_t& busy) {
+  // A free miss-queue entry per missing line (one whose line is available by
+  // now). The entries' cycles in ascending order (miss_sorted_) give the free
+  // count and the cycle the last entry needed frees without a scan: the queue
+  // is nearly always busy (bench trace: 96 % of the entries), so this test
+  // runs on most misses and on every refused retry.
+  busy = 0;  // entries in flight before this access
+  if (miss_queue_max_ <= now) return false;
+  const Cycle* const sorted = miss_sorted_.data() + sorted_head_;
+  uint32_t free = 0;
+  while (free < cfg_.miss_queue && sorted[free] <= now) ++free;
+  busy = cfg_.miss_queue - free;
+  if (free >= misses) return false;
+  // Exact: the (misses - free)-th smallest busy entry frees the last one
+  // needed (one missing line, the usual case: the earliest), i.e. the
+  // misses-th smallest entry.
+  miss_queue_min_ = sorted[std::min(misses, cfg_.miss_queue) - 1];
+  refused_by_set_ = false;
+  ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
+  return true;
+}
+
+uint32_t BlendArrayCache::victimIn(uint32_t set) const {
+  // The first invalid way, else the least recently used of the lines out of
+  // use (stamps are 0 only while invalid); kInvalid when every way is pinned.
+  const size_t first = size_t(set) * ways_;
+  uint32_t victim = kInvalid;
+  uint64_t victim_stamp = ~uint64_t(0);  // stamps never reach it
+  for (size_t w = first; w < first + ways_; ++w)
+    if (lines_[w].pins == 0 && lines_[w].stamp < victim_stamp) {
+      victim = uint32_t(w);
+      victim_stamp = lines_[w].stamp;
+    }
+  return victim;
+}
+
+Cycle BlendArrayCache::commitMiss(Cycle now, uint32_t tile, const LineTouch& t, uint32_t index, bool absent,
+                                  uint32_t& slot) {
+  Line& line = lines_[index];
+  const uint32_t ll = lineOf(tile, t.line);
+  ++stats_.accesses;
+  ++stats_.misses;
+  stats_.read_bytes += uint64_t(sectorCount(t.fill)) * geo_.sector_bytes;
+  if (classify_) classifyAccess(ll, t.fill | t.dirty, true);
+  Cycle line_ready = now + cfg_.hit_latency;
+  if (absent) {
+    if (line.line != kInvalid) {
+      ++stats_.evictions;
+      line_of_[line.line] = kInvalid;
+      if (line.dirty) {
+        ++stats_.writebacks;
+        const uint64_t addr = lineAddress(line.tile, line.in_tile);
+        forEachRun(line.dirty, [&](uint32_t s, uint32_t e) {  // a write per run of dirty sectors
+          const uint32_t bytes = (e - s) * geo_.sector_bytes;
+          stats_.writeback_bytes += bytes;
+          line_ready = std::max(line_ready, lower_.access(now, addr + uint64_t(s) * geo_.sector_bytes, bytes, true,
+                                                          Surface::BlendArrays));
+        });
+      }
+    }
+    const uint32_t pins = line.pins;
+    line = Line{};
+    line.line = ll;
+    line.tile = tile;
+    line.in_tile = t.line;
+    line.pins = pins;
+    line_of_[ll] = index;
+  } else {
+    ++stats_.sector_misses;
+  }
+  // The sectors to fill: those needed and not held; with fast clear, the
+  // ones never written this frame come from the clear value on chip.
+  const uint32_t missing = t.fill & ~line.valid;
+  const uint32_t from_below = fast_clear_ ? missing & written_[ll] : missing;
+  if (from_below == 0) {
+    ++stats_.clear_fills;
+  } else {
+    const uint64_t addr = lineAddress(tile, t.line);
+    forEachRun(from_below, [&](uint32_t s, uint32_t e) {  // a read per run of sectors
+      const uint32_t bytes = (e - s) * geo_.sector_bytes;
+      stats_.fill_bytes += bytes;
+      line_ready = std::max(line_ready, lower_.access(now, addr + uint64_t(s) * geo_.sector_bytes, bytes, false,
+                                                      Surface::BlendArrays));
+    });
+  }
+  line.valid |= missing | t.dirty;
+  if (t.dirty) {
+    line.dirty |= t.dirty;
+    written_[ll] |= t.dirty;
+    tile_touched_[tile] = 1;
+    stats_.write_bytes += uint64_t(sectorCount(t.dirty)) * geo_.sector_bytes;
+  }
+  line.stamp = ++stamp_;
+  line.ready = std::max(line.ready, line_ready);
+  // Its miss-queue entry (the first free one from `slot` on): busy until the line is there.
+  while (miss_queue_[slot] > now) ++slot;
+  replaceSorted(miss_queue_[slot], line.ready);
+  miss_queue_[slot] = line.ready;
+  miss_queue_max_ = std::max(miss_queue_max_, line.ready);
+  return line.ready;
+}
+
 // Out of line: several lines, or a line missing (or lacking a sector).
 Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const LineTouch> lines, bool pin) {
   if (tile >= tiles_) throw std::out_of_range("BlendArrayCache::acquire: tile out of range");
+  if (lines.size() == 1) [[likely]] {
+    // One line, and acquire() / touch() found it missing: the same steps as
+    // below for one line, without the lists.
+    const LineTouch& t = lines[0];
+    if (t.line >= geo_.lines_per_tile) throw std::out_of_range("BlendArrayCache::acquire: line out of range");
+    uint32_t index = indexOf(tile, t.line);
+    const bool absent = index == kInvalid;
+    uint32_t busy;
+    if (missQueueRefuses(now, 1, busy)) return kNever;
+    if (absent) {
+      const uint32_t set = (base_of_[tile] + t.line) % sets_;
+      index = victimIn(set);
+      if (index == kInvalid) {
+        refused_by_set_ = true;
+        refused_set_ = set;
+        ++stats_.set_in_use;
+        return kNever;
+      }
+    }
+    refused_by_set_ = false;
+    // Pinned while its fill is booked (below the victim keeps the pins of its way).
+    ++lines_[index].pins;
+    uint32_t slot = 0;
+    const Cycle line_ready = commitMiss(now, tile, t, index, absent, slot);
+    stats_.peak_misses_in_flight =
+        std::max(stats_.peak_misses_in_flight, std::min(busy + (line_ready > now ? 1u : 0u), cfg_.miss_queue));
+    if (!pin) --lines_[index].pins;
+    return std::max(now + cfg_.hit_latency, line_ready);
+  }
   // Which lines are resident with their sectors (hits), resident without some
   // (sector misses) or absent (tag misses).
   scratch_index_.clear();
@@ -127,33 +258,8 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     scratch_index_.push_back(index);
     misses += index == kInvalid || (t.fill & ~lines_[index].valid) != 0;
   }
-  // A free miss-queue entry per missing line (one whose line is available by now).
   uint32_t busy = 0;  // entries in flight before this access
-  if (misses != 0 && miss_queue_max_ > now) {
-    Cycle earliest = kNever;
-    for (Cycle c : miss_queue_)
-      if (c > now) {
-        ++busy;
-        earliest = std::min(earliest, c);
-      }
-    if (cfg_.miss_queue - busy < misses) {
-      // Exact: the (misses - free)-th smallest busy entry frees the last one
-      // needed (one missing line, the usual case: the earliest).
-      const uint32_t k = misses - (cfg_.miss_queue - busy);
-      if (k == 1) {
-        miss_queue_min_ = earliest;
-      } else {
-        scratch_busy_.clear();
-        for (Cycle c : miss_queue_)
-          if (c > now) scratch_busy_.push_back(c);
-        std::nth_element(scratch_busy_.begin(), scratch_busy_.begin() + (k - 1), scratch_busy_.end());
-        miss_queue_min_ = scratch_busy_[k - 1];
-      }
-      refused_by_set_ = false;
-      ++stats_.miss_queue_full;  // refused: no state change, not counted as an access
-      return kNever;
-    }
-  }
+  if (misses != 0 && missQueueRefuses(now, misses, busy)) return kNever;
   // Victims for the absent lines: the first invalid way, else the least
   // recently used of the lines out of use (a pinned line is filling or waits
   // for its blend; evicting it would let more fills be in flight than the
@@ -165,14 +271,7 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
   for (size_t i = 0; i < lines.size(); ++i) {
     if (scratch_index_[i] != kInvalid) continue;
     const uint32_t set = (base_of_[tile] + lines[i].line) % sets_;
-    const size_t first = size_t(set) * ways_;
-    uint32_t victim = kInvalid;
-    uint64_t victim_stamp = ~uint64_t(0);  // stamps never reach it
-    for (size_t w = first; w < first + ways_; ++w)
-      if (lines_[w].pins == 0 && lines_[w].stamp < victim_stamp) {
-        victim = uint32_t(w);
-        victim_stamp = lines_[w].stamp;
-      }
+    const uint32_t victim = victimIn(set);
     if (victim == kInvalid) {
       for (uint32_t index : scratch_index_)  // the access's lines and the victims chosen so far
         if (index != kInvalid) --lines_[index & 0x7FFFFFFFu].pins;
@@ -196,71 +295,13 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     const bool absent = (scratch_index_[i] & 0x80000000u) != 0;
     const uint32_t index = scratch_index_[i] & 0x7FFFFFFFu;
     Line& line = lines_[index];
-    const uint32_t ll = lineOf(tile, t.line);
     if (!absent && (t.fill & ~line.valid) == 0) {
-      ready = std::max(ready, hit(line, now, ll, t));
+      ready = std::max(ready, hit(line, now, lineOf(tile, t.line), t));
       continue;
     }
-    ++stats_.accesses;
-    ++stats_.misses;
-    stats_.read_bytes += uint64_t(sectorCount(t.fill)) * geo_.sector_bytes;
-    if (classify_) classifyAccess(ll, t.fill | t.dirty, true);
-    Cycle line_ready = hit_ready;
-    if (absent) {
-      if (line.line != kInvalid) {
-        ++stats_.evictions;
-        line_of_[line.line] = kInvalid;
-        if (line.dirty) {
-          ++stats_.writebacks;
-          const uint64_t addr = lineAddress(line.tile, line.in_tile);
-          forEachRun(line.dirty, [&](uint32_t s, uint32_t e) {  // a write per run of dirty sectors
-            const uint32_t bytes = (e - s) * geo_.sector_bytes;
-            stats_.writeback_bytes += bytes;
-            line_ready = std::max(line_ready, lower_.access(now, addr + uint64_t(s) * geo_.sector_bytes, bytes, true,
-                                                            Surface::BlendArrays));
-          });
-        }
-      }
-      const uint32_t pins = line.pins;
-      line = Line{};
-      line.line = ll;
-      line.tile = tile;
-      line.in_tile = t.line;
-      line.pins = pins;
-      line_of_[ll] = index;
-    } else {
-      ++stats_.sector_misses;
-    }
-    // The sectors to fill: those needed and not held; with fast clear, the
-    // ones never written this frame come from the clear value on chip.
-    const uint32_t missing = t.fill & ~line.valid;
-    const uint32_t from_below = fast_clear_ ? missing & written_[ll] : missing;
-    if (from_below == 0) {
-      ++stats_.clear_fills;
-    } else {
-      const uint64_t addr = lineAddress(tile, t.line);
-      forEachRun(from_below, [&](uint32_t s, uint32_t e) {  // a read per run of sectors
-        const uint32_t bytes = (e - s) * geo_.sector_bytes;
-        stats_.fill_bytes += bytes;
-        line_ready = std::max(line_ready, lower_.access(now, addr + uint64_t(s) * geo_.sector_bytes, bytes, false,
-                                                        Surface::BlendArrays));
-      });
-    }
-    line.valid |= missing | t.dirty;
-    if (t.dirty) {
-      line.dirty |= t.dirty;
-      written_[ll] |= t.dirty;
-      tile_touched_[tile] = 1;
-      stats_.write_bytes += uint64_t(sectorCount(t.dirty)) * geo_.sector_bytes;
-    }
-    line.stamp = ++stamp_;
-    line.ready = std::max(line.ready, line_ready);
-    ready = std::max(ready, line.ready);
-    // Its miss-queue entry: busy until the line is there.
-    mine += line.ready > now;
-    while (miss_queue_[slot] > now) ++slot;
-    miss_queue_[slot] = line.ready;
-    miss_queue_max_ = std::max(miss_queue_max_, line.ready);
+    const Cycle line_ready = commitMiss(now, tile, t, index, absent, slot);
+    ready = std::max(ready, line_ready);
+    mine += line_ready > now;
   }
   if (misses != 0) {
     // The entries busy before plus this access's misses whose line is not there yet.
@@ -269,6 +310,27 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
   if (!pin)
     for (uint32_t index : scratch_index_) --lines_[index & 0x7FFFFFFFu].pins;
   return ready;
+}
+
+void BlendArrayCache::replaceSorted(Cycle old, Cycle now_ready) {
+  // `old` is in the list, near its front (it is free: not later than the
+  // access's cycle); the new value is not smaller (an entry only grows) and
+  // usually the largest. The list is a window of a buffer twice its size:
+  // `old` leaves by shifting the few values before it one place on and
+  // moving the window's start; the new value enters at the window's end and
+  // moves back past the larger values (usually none).
+  const size_t n = cfg_.miss_queue;
+  Cycle* const b = miss_sorted_.data();
+  size_t i = sorted_head_;
+  while (b[i] != old) ++i;
+  for (; i > sorted_head_; --i) b[i] = b[i - 1];
+  if (++sorted_head_ == n) {  // the window reached the buffer's end: back to its start
+    std::copy(b + n, b + 2 * n - 1, b);
+    sorted_head_ = 0;
+  }
+  size_t j = sorted_head_ + n - 1;
+  for (; j > sorted_head_ && b[j - 1] > now_ready; --j) b[j] = b[j - 1];
+  b[j] = now_ready;
 }
 
 void BlendArrayCache::releaseWithoutAcquire(uint32_t tile, uint32_t line) {

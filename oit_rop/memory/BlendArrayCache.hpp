@@ -183,6 +183,14 @@ class BlendArrayCache {
     return tile < tiles_ ? line_of_[base_of_[tile] + l] : kInvalid;
   }
   Cycle acquireSlow(Cycle now, uint32_t tile, std::span<const LineTouch> lines, bool pin);
+  // acquireSlow's steps. Refuses (true; the stats and missQueueFreesAt() set)
+  // when the miss queue lacks an entry for each of `misses`; `busy`: the
+  // entries in flight.
+  bool missQueueRefuses(Cycle now, uint32_t misses, uint32_t& busy);
+  uint32_t victimIn(uint32_t set) const;  // a way out of use for a new line, or kInvalid
+  // A missing line (absent: into way `index`, evicting its line) filled, its
+  // miss-queue entry taken (the first free from `slot` on); returns when it is there.
+  Cycle commitMiss(Cycle now, uint32_t tile, const LineTouch& t, uint32_t index, bool absent, uint32_t& slot);
   Cycle hit(Line& line, Cycle now, uint32_t ll, const LineTouch& t) {  // a resident line with its sectors, but the pin
     ++stats_.accesses;
     ++stats_.hits;
@@ -204,6 +212,7 @@ class BlendArrayCache {
     return hit_ready;
   }
   void classifyAccess(uint32_t ll, uint32_t sectors, bool missed);
+  void replaceSorted(Cycle old, Cycle now_ready);  // miss_sorted_: one entry old -> now_ready (>= old)
   [[noreturn]] static void releaseWithoutAcquire(uint32_t tile, uint32_t line);
 
   CacheConfig cfg_;
@@ -220,6 +229,8 @@ class BlendArrayCache {
   std::vector<uint32_t> written_;    // per line number: sectors written this frame
   std::vector<uint8_t> tile_touched_;  // per tile: a sector written this frame
   std::vector<Cycle> miss_queue_;    // per entry: cycle it frees (<= now: free)
+  std::vector<Cycle> miss_sorted_;   // the same cycles, ascending: [sorted_head_, + miss_queue) of twice that
+  size_t sorted_head_ = 0;
   Cycle miss_queue_max_ = 0;         // the largest entry (an entry only ever grows)
   Cycle miss_queue_min_ = 0;         // after a refusal: when enough entries are free
   uint64_t stamp_ = 0;
@@ -233,7 +244,6 @@ class BlendArrayCache {
   uint32_t fa_head_ = kInvalid, fa_tail_ = kInvalid, fa_size_ = 0;
   // Scratch of acquireSlow (no allocation per call).
   std::vector<uint32_t> scratch_index_;
-  std::vector<Cycle> scratch_busy_;
   CacheStats stats_;
 };
 

@@ -248,15 +248,19 @@ void CacheLevel::evict(Cycle now, size_t way) {
 size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
   const size_t set_no = set >> way_shift_;
   set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
-  // The first invalid way, else the least recently used (the first of equal stamps).
-  size_t victim = set;
+  // The first invalid way, else the least recently used (the first of equal
+  // stamps); the set's tags and stamps found once, not per way.
+  const uint64_t* const tags = tagsOf(set);
+  const uint64_t* const stamps = tags + cfg_.ways;
+  unsigned v = 0;
   for (unsigned w = 0; w < cfg_.ways; ++w) {
-    if (tag(set + w) == 0) {
-      victim = set + w;
+    if (tags[w] == 0) {
+      v = w;
       break;
     }
-    if (stamp(set + w) < stamp(victim)) victim = set + w;
+    if (stamps[w] < stamps[v]) v = w;
   }
+  const size_t victim = set + v;
   evict(now, victim);
   tag(victim) = line + 1;
   return victim;
@@ -303,7 +307,10 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     const uint64_t line_addr = line * cfg_.line_bytes;
     const uint64_t b = std::max(addr, line_addr), e = std::min(addr + bytes, line_addr + cfg_.line_bytes);
     uint32_t any, whole;
-    sectorsOf(line_addr, addr, bytes, any, whole);
+    if (b == line_addr && e == line_addr + cfg_.line_bytes) [[likely]]  // a whole line (a line-sized fill or write-back)
+      any = whole = all_sectors_;
+    else
+      sectorsOf(line_addr, addr, bytes, any, whole);
     unsigned slice;
     const size_t set = setOfLine(line, slice);
     Cycle moved;

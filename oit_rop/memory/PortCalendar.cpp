@@ -68,38 +68,41 @@ void PortCalendar::grow(Cycle last) {
   mask_ = mask;
 }
 
-void PortCalendar::book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end) {
-  if (now > latest_) {
-    latest_ = now;
-    if (lookback_ != 0 && latest_ > lookback_ && latest_ - lookback_ > base_) advanceBase(latest_ - lookback_);
-  }
-  Cycle c = std::max(now, base_);
-  uint64_t need = (uint64_t(bytes) * parts_per_byte_ + 0xFFFF) >> 16;  // parts of a cycle
-  if (need == 0) {
-    start = end = c;
-    return;
-  }
-  bool started = false;
+void PortCalendar::bookFrom(Cycle c, uint64_t need, Cycle& start, Cycle& end) {
+  // The ring in locals: a store into it cannot alias them, so they are not
+  // reloaded per cycle (reloaded after a grow).
+  uint32_t* used = used_.data();
+  uint64_t* full_bits = full_.data();
+  uint64_t mask = mask_;
+  Cycle limit = base_ + mask_;  // the last cycle the ring covers
+  // The first cycle from c on with capacity left: full cycles skipped, a
+  // bitmap word (64 cycles) at a time where possible.
+  const auto firstWithRoom = [&] {
+    for (;;) {
+      if (c > limit) [[unlikely]] {
+        grow(c);
+        used = used_.data();
+        full_bits = full_.data();
+        mask = mask_;
+        limit = base_ + mask_;
+      }
+      const unsigned bit = unsigned(c & 63);
+      const uint64_t word = full_bits[(c & mask) >> 6] >> bit;
+      if ((word & 1) == 0) return;
+      c += word == ~uint64_t(0) >> bit ? 64 - bit : unsigned(std::countr_one(word));
+    }
+  };
+  firstWithRoom();
+  start = c;
   for (;;) {
-    reserve(c);
-    // Skip full cycles, a bitmap word (64 cycles) at a time where possible.
-    if (full(c)) {
-      const uint64_t word = full_[(c & mask_) >> 6] >> (c & 63);
-      const unsigned run = word == ~uint64_t(0) >> (c & 63) ? 64 - unsigned(c & 63) : unsigned(std::countr_one(word));
-      c += run;
-      continue;
-    }
-    uint32_t& u = slot(c);
+    uint32_t& u = used[c & mask];
     const uint64_t take = std::min<uint64_t>(kFull - u, need);
-    if (!started) {
-      start = c;
-      started = true;
-    }
     u += uint32_t(take);
-    if (u == kFull) setFull(c);
+    if (u == kFull) full_bits[(c & mask) >> 6] |= uint64_t(1) << (c & 63);
     need -= take;
     ++c;
     if (need == 0) break;
+    firstWithRoom();
   }
   end = c;
 }

@@ -30,14 +30,45 @@ class PortCalendar {
   PortCalendar(double bytes_per_clock, Cycle lookback);
   // Books `bytes` from cycle `now` on; `start`: the first cycle moving them,
   // `end`: the cycle after the last (the transfer is done at `end`).
-  void book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end);
+  void book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end) {
+    if (now > latest_) {
+      latest_ = now;
+      if (lookback_ != 0 && latest_ > lookback_) retireBefore(latest_ - lookback_);
+    }
+    const Cycle c = now > base_ ? now : base_;
+    const uint64_t need = (uint64_t(bytes) * parts_per_byte_ + 0xFFFF) >> 16;  // parts of a cycle
+    // Inline: the whole request fits into the capacity left in its first
+    // cycle (a blend slot, a depth-test slot: a fraction of a cycle each).
+    if (need == 0) {
+      start = end = c;
+      return;
+    }
+    if (c <= base_ + mask_ && need <= kFull - used_[c & mask_]) {
+      uint32_t& u = used_[c & mask_];
+      u += uint32_t(need);
+      if (u == kFull) setFull(c);
+      start = c;
+      end = c + 1;
+      return;
+    }
+    bookFrom(c, need, start, end);
+  }
   // Capacity booked in cycle c, in 2^-16 parts of the cycle (tests).
   uint32_t used(Cycle c) const;
   // No request will come before cycle c: the ring may drop the cycles before
   // it (a caller that knows its requests' floor; with lookback 0 the only way
   // the ring moves on).
   void retireBefore(Cycle c) {
-    if (c > base_) advanceBase(c);
+    if (c <= base_) return;
+    if (c - base_ <= 4) {  // a retire per fragment moves a cycle or two: cleared here, no call
+      for (Cycle x = base_; x < c; ++x) {
+        used_[x & mask_] = 0;
+        full_[(x & mask_) >> 6] &= ~(uint64_t(1) << (x & 63));
+      }
+      base_ = c;
+      return;
+    }
+    advanceBase(c);
   }
 
  private:
@@ -46,6 +77,7 @@ class PortCalendar {
     if (last > base_ + mask_) grow(last);
   }
   void grow(Cycle last);
+  void bookFrom(Cycle c, uint64_t need, Cycle& start, Cycle& end);  // book()'s general case (need > 0)
   void advanceBase(Cycle base);  // base > base_
   void clearRange(std::size_t first, std::size_t n);  // the ring's slots [first, first + n), no wrap
   uint32_t& slot(Cycle c) { return used_[c & mask_]; }

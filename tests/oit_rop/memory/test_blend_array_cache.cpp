@@ -805,6 +805,36 @@ TEST(BlendArrayCacheLines, FastClearIsPerSector) {
   EXPECT_EQ(cache.stats().clear_fills, 3u);  // the first fill, tile 1's, and sector 1's
 }
 
+TEST(BlendArrayCacheLines, ARefusedAccessWaitsForTheEntryThatFreesItsLastNeededOne) {
+  // Three entries busy until 50, 55 and 70 (fills of 50 cycles from 0, 5 and
+  // 20): an access of k missing lines is refused until the k-th earliest
+  // frees, whatever order the entries were taken in, also for an access at an
+  // earlier cycle than the last one (the approximate engine retries later).
+  Recorder below;
+  BlendArrayCache cache(sectoredCache(16, 4, /*miss_queue=*/3), kSectored, 16, 0, below, false);
+  const LineTouch one{0, 0b1111, 0};
+  const LineTouch line1{1, 0b1111, 0};
+  const LineTouch two[2] = {{0, 0b1111, 0}, {1, 0b1111, 0}};
+  const LineTouch three[3] = {{0, 0b1111, 0}, {1, 0b1111, 0}, {2, 0b1111, 0}};
+  EXPECT_EQ(cache.acquire(20, 2, std::span(&one, 1)), 70u);
+  EXPECT_EQ(cache.acquire(0, 0, std::span(&one, 1)), 50u);
+  EXPECT_EQ(cache.acquire(5, 1, std::span(&one, 1)), 55u);
+  EXPECT_EQ(cache.acquire(30, 3, two), kNever);  // no entry free: the second earliest
+  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
+  EXPECT_EQ(cache.acquire(30, 3, std::span(&line1, 1)), kNever);  // the earliest
+  EXPECT_EQ(cache.missQueueFreesAt(), 50u);
+  EXPECT_EQ(cache.acquire(52, 3, two), kNever);  // one free (50), two needed
+  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
+  EXPECT_EQ(cache.acquire(52, 3, std::span(&line1, 1)), 102u);  // takes the entry freed at 50: busy to 102
+  EXPECT_EQ(cache.acquire(40, 4, std::span(&one, 1)), kNever);  // at 40 all busy (55, 70, 102)
+  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
+  EXPECT_EQ(cache.acquire(60, 4, three), kNever);  // one free (55), three needed: the third earliest
+  EXPECT_EQ(cache.missQueueFreesAt(), 102u);
+  EXPECT_EQ(cache.stats().miss_queue_full, 5u);  // one per refused access
+  EXPECT_EQ(cache.stats().misses, 4u);
+  EXPECT_EQ(cache.missesInFlight(60), 2u);  // 70 and 102
+}
+
 TEST(BlendArrayCacheLines, AnAccessGetsAllItsLinesOrNone) {
   Recorder below;
   BlendArrayCache cache(sectoredCache(16, 4, /*miss_queue=*/3), kSectored, 16, 0, below, false);
