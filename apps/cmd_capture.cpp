@@ -142,9 +142,13 @@ void runApitraceCapture(const CaptureArgs& a) {
     fmt::print("{}\n", capture::frameSummary(f, rangeFileName(a.output, f.frame, o.first_frame, o.last_frame)));
     if (a.verify) fmt::print("{}\n", verify_lines[i]);
   }
-  fmt::print("{} frame{}, {} fragments in {:.2f} s ({}fragments/s, replay included)\n", r.frames.size(),
+  fmt::print("{} frame{}, {} fragments in {:.2f} s ({}fragments/s, replay included){}\n", r.frames.size(),
              r.frames.size() == 1 ? "" : "s", fragments, r.seconds,
-             humanCount(r.seconds > 0 ? fragments / r.seconds : 0.0) + " ");
+             humanCount(r.seconds > 0 ? fragments / r.seconds : 0.0) + " ",
+             r.replays > 1 ? fmt::format("; replayed twice: a draw outgrew the first record buffer ({} records), "
+                                         "the second held {}",
+                                         r.first_record_capacity, r.record_capacity)
+                           : "");
 }
 
 // "r,g,b", each a number in [0, 1].

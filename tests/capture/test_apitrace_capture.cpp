@@ -287,6 +287,40 @@ TEST_F(ApitraceCapture, VerifyAndCommandLine) {
   }
 }
 
+// The record buffer starts sized to the frame (ApitraceOptions::records_per_pixel);
+// a draw that outgrows it has blended already, so the capture replays the trace
+// with room for the largest such draw. Here 0.1 records per pixel: 307 records for
+// the 64 x 48 frame, against more than 500 per cube draw; the second replay's
+// buffer holds the largest draw's count, and the frame equals a capture whose
+// buffer was GL's largest block from the start.
+TEST_F(ApitraceCapture, ADrawThatOutgrowsTheFirstRecordBufferIsCapturedByASecondReplay) {
+  const std::string trace = traceApp({"glsl120 over off", "glsl330 over test", "discard over off"});
+  ApitraceOptions o = options(trace, 1);
+  o.records_per_pixel = 0;
+  const ApitraceResult full = captureApitrace(o);
+  ASSERT_EQ(full.frames.size(), 1u);
+  EXPECT_EQ(full.replays, 1u);
+  EXPECT_EQ(full.record_capacity, full.record_limit);
+  EXPECT_TRUE(full.frames[0].uncaptured.empty());
+  o.records_per_pixel = 0.1;
+  const ApitraceResult r = captureApitrace(o);
+  ASSERT_EQ(r.frames.size(), 1u);
+  EXPECT_EQ(r.replays, 2u);
+  EXPECT_EQ(r.first_record_capacity, 307u);  // floor(0.1 * 64 * 48)
+  EXPECT_EQ(r.record_capacity, mesh_.fragments.size());  // draws 0 and 1 record every cube fragment
+  EXPECT_TRUE(r.frames[0].uncaptured.empty());
+  EXPECT_TRUE(same(r.frames[0].fragments, full.frames[0].fragments))
+      << firstDifference(r.frames[0].fragments, full.frames[0].fragments);
+  // --max-records-per-draw caps the second buffer: a draw above the cap stays listed.
+  o.max_records_per_draw = 400;
+  const ApitraceResult capped = captureApitrace(o);
+  EXPECT_EQ(capped.replays, 2u);
+  EXPECT_EQ(capped.record_capacity, 400u);
+  ASSERT_EQ(capped.frames[0].uncaptured.size(), 3u);
+  EXPECT_EQ(capped.frames[0].uncaptured[0].reason, static_cast<uint32_t>(stream::kOverflow));
+  EXPECT_EQ(capped.frames[0].uncaptured[0].fragments, mesh_.fragments.size());
+}
+
 // Bad input: one line naming the file, the frame or the program; exit 1; nothing written.
 TEST_F(ApitraceCapture, ErrorsNameTheFileFrameOrProgram) {
   const std::string oitsim = std::string(OITSIM_BINARY_DIR) + "/apps/oitsim";

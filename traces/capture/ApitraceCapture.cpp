@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,9 +16,11 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
+#include "traces/capture/ApiOrder.hpp"
 #include "traces/capture/interposer/BlendClass.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 
@@ -146,8 +149,11 @@ class PrivateXServer {
 
 // Runs the retracer with the interposer as its libGL.so.1; returns its exit status
 // (the raw waitpid status).
-int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std::string& gl_dir,
-                const std::string& display, const std::string& stream_path, const std::string& log_path) {
+// The record buffer holds `records_per_pixel` records per pixel of the frame (0:
+// `max_records`, or GL's largest storage block when that is 0).
+int runRetracer(const ApitraceOptions& o, uint64_t max_records, double records_per_pixel,
+                const std::string& retracer, const std::string& gl_dir, const std::string& display,
+                const std::string& stream_path, const std::string& log_path) {
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e) {
     const std::string_view v(*e);
@@ -170,7 +176,8 @@ int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std
   env.push_back("OITSIM_STREAM=" + stream_path);
   env.push_back(fmt::format("OITSIM_FRAMES={}-{}", o.first_frame, o.last_frame));
   env.push_back(std::string("OITSIM_VERIFY=") + (o.verify ? "1" : "0"));
-  env.push_back(fmt::format("OITSIM_MAX_RECORDS={}", o.max_records_per_draw));
+  env.push_back(fmt::format("OITSIM_MAX_RECORDS={}", max_records));
+  env.push_back(fmt::format("OITSIM_RECORDS_PER_PIXEL={}", records_per_pixel));
   std::vector<char*> envp;
   for (std::string& s : env) envp.push_back(s.data());
   envp.push_back(nullptr);
@@ -246,6 +253,19 @@ DrawState toDrawState(const st::DrawChunk& d, uint64_t fragments) {
   return s;
 }
 
+// The full order of two fragments of one draw: API order (primitive, y, x), then
+// depth and colour for the equal keys of instanced draws.
+bool apiLess(const Fragment& a, const Fragment& b) {
+  if (a.prim != b.prim) return a.prim < b.prim;
+  if (a.y != b.y) return a.y < b.y;
+  if (a.x != b.x) return a.x < b.x;
+  if (a.z != b.z) return a.z < b.z;
+  if (a.r != b.r) return a.r < b.r;
+  if (a.g != b.g) return a.g < b.g;
+  if (a.b != b.b) return a.b < b.b;
+  return a.a < b.a;
+}
+
 // Appends one captured draw's records to the frame in API order.
 void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f) {
   const auto mode = static_cast<BlendMode>(d.state.blend_mode);
@@ -261,41 +281,41 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   if (!d.state.early_tests) ++f.late_depth_draws;
   if (d.instanced) ++f.multi_draws;
   if (!info.state->recorded()) return;  // listed, not modelled: its fragments stay out
+  // Threads append in any order. API order within a draw: primitive, then pixel
+  // rows bottom-up, then x (as oitsim gen and the mesh capture emit), by a radix
+  // sort of the keys (ApiOrder.hpp); the records are converted in that order.
+  const std::vector<uint32_t> order =
+      apiOrder(d.records, [&](size_t i) { return RecordKey{recs[i].prim, recs[i].xy}; });
   const size_t first = f.fragments.size();
-  f.fragments.reserve(first + d.records);  // not resize: its zero fill was 6 % of the capture's CPU time
-  for (uint64_t i = 0; i < d.records; ++i) {
+  for (const uint32_t i : order) {
     Fragment frag;
     toFragment(recs[i], d, f, frag);
     f.fragments.push_back(frag);
   }
-  // Threads append in any order. API order within a draw: primitive, then pixel
-  // rows bottom-up, then x (as oitsim gen and the mesh capture emit). Instances and
-  // sub-draws restart primitive ids: their fragments at one pixel are then ordered by
-  // depth and colour, deterministic but not necessarily the instances' order.
-  std::sort(f.fragments.begin() + static_cast<std::ptrdiff_t>(first), f.fragments.end(),
-            [](const Fragment& a, const Fragment& b) {
-              if (a.prim != b.prim) return a.prim < b.prim;
-              if (a.y != b.y) return a.y < b.y;
-              if (a.x != b.x) return a.x < b.x;
-              if (a.z != b.z) return a.z < b.z;
-              if (a.r != b.r) return a.r < b.r;
-              if (a.g != b.g) return a.g < b.g;
-              if (a.b != b.b) return a.b < b.b;
-              return a.a < b.a;
-            });
+  // Instances and sub-draws restart primitive ids (and a geometry shader may not
+  // write one): their fragments at one pixel (equal keys, left in thread order by
+  // the stable sort) are ordered by depth and colour, deterministic but not
+  // necessarily the instances' order.
+  auto run = f.fragments.begin() + static_cast<std::ptrdiff_t>(first);
+  while (run != f.fragments.end()) {
+    auto end = run + 1;
+    while (end != f.fragments.end() && end->prim == run->prim && end->y == run->y && end->x == run->x) ++end;
+    if (end - run > 1) std::sort(run, end, apiLess);
+    run = end;
+  }
 }
 
 class StreamReader {
  public:
-  StreamReader(const std::string& data, const std::string& trace) : d_(data), trace_(trace) {}
-  bool done() const { return pos_ >= d_.size(); }
+  StreamReader(const char* data, uint64_t size, const std::string& trace) : d_(data), size_(size), trace_(trace) {}
+  bool done() const { return pos_ >= size_; }
   template <typename T>
   const T* take(uint64_t n = 1) {
     const uint64_t bytes = sizeof(T) * n;
-    if (d_.size() - pos_ < bytes)
+    if (size_ - pos_ < bytes || bytes / sizeof(T) != n)
       throw std::runtime_error(fmt::format("{}: the interposer's stream ends inside a chunk (the retracer stopped "
                                            "while writing it)", trace_));
-    const T* p = reinterpret_cast<const T*>(d_.data() + pos_);
+    const T* p = reinterpret_cast<const T*>(d_ + pos_);
     pos_ += bytes;
     return p;
   }
@@ -305,10 +325,91 @@ class StreamReader {
   }
 
  private:
-  const std::string& d_;
+  const char* d_;
+  uint64_t size_;
   const std::string& trace_;
   uint64_t pos_ = 0;
 };
+
+// The interposer's stream, mapped read-only: no copy of its records (46 MB for the
+// glmark2 frame) into a zero-filled string first.
+class MappedStream {
+ public:
+  explicit MappedStream(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return;  // no stream: the caller reports the retracer's failure
+    struct stat sb{};
+    if (::fstat(fd, &sb) == 0 && sb.st_size > 0) {
+      void* p = ::mmap(nullptr, static_cast<size_t>(sb.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      if (p != MAP_FAILED) {
+        data_ = static_cast<const char*>(p);
+        size_ = static_cast<uint64_t>(sb.st_size);
+      }
+    }
+    ::close(fd);
+  }
+  ~MappedStream() {
+    if (data_) ::munmap(const_cast<char*>(data_), size_);
+  }
+  MappedStream(const MappedStream&) = delete;
+  MappedStream& operator=(const MappedStream&) = delete;
+  const char* data() const { return data_; }
+  uint64_t size() const { return size_; }
+
+ private:
+  const char* data_ = nullptr;
+  uint64_t size_ = 0;
+};
+
+// Records of recorded draws per frame, from the chunk headers alone (a malformed
+// stream is left to the full pass to report), so each frame's fragments take one
+// allocation.
+std::unordered_map<uint32_t, uint64_t> recordsPerFrame(const char* data, uint64_t size) {
+  std::unordered_map<uint32_t, uint64_t> n;
+  uint64_t pos = sizeof(st::StreamHeader);
+  while (size - pos >= sizeof(st::ChunkHeader)) {
+    st::ChunkHeader c;
+    std::memcpy(&c, data + pos, sizeof c);
+    pos += sizeof c;
+    if (c.tag != st::kDraw) {
+      if (c.tag == st::kEnd || c.tag == st::kError) break;
+      if (c.tag == st::kVerify) {
+        st::FrameChunk f;
+        if (size - pos < sizeof f) break;
+        std::memcpy(&f, data + pos, sizeof f);
+        pos += sizeof f + uint64_t(f.width) * f.height * (4 * sizeof(float) + sizeof(uint32_t));
+      } else {
+        pos += c.bytes;
+      }
+      if (pos > size) break;
+      continue;
+    }
+    st::DrawChunk d;
+    if (size - pos < sizeof d) break;
+    std::memcpy(&d, data + pos, sizeof d);
+    pos += sizeof d;
+    if (d.records > (size - pos) / sizeof(st::GpuRecord)) break;
+    pos += d.records * sizeof(st::GpuRecord);
+    if (d.reason == st::kCaptured && d.state.blend_mode <= st::kBlendPremulOver) n[d.frame] += d.records;
+  }
+  return n;
+}
+
+// Room for `n` fragments in one allocation, backed by transparent huge pages where
+// the kernel offers them on request (THP "madvise"): a 4 KiB page fault per 128
+// fragments was a fifth of oitsim's CPU time on the glmark2 frame.
+void reserveFragments(std::vector<Fragment>& v, uint64_t n) {
+  v.reserve(n);
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const auto begin = reinterpret_cast<uintptr_t>(v.data());
+  const uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t last = (begin + n * sizeof(Fragment)) & ~(kHuge - 1);
+  if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+}
+
+// Reads the interposer's stream of one retracer run into frames.
+ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer, const std::string& interposer,
+                          int status, const std::string& stream_path, const std::string& log_path);
 
 }  // namespace
 
@@ -365,16 +466,43 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
   const std::string gl_dir = tmp.path + "/gl";
   fs::create_directory(gl_dir);
   fs::create_symlink(fs::absolute(interposer), gl_dir + "/libGL.so.1");
-  int status = 0;
-  if (!xvfb.empty()) {
-    const PrivateXServer x(xvfb);
-    status = runRetracer(o, retracer, gl_dir, x.display(), stream_path, log_path);
-  } else {
-    status = runRetracer(o, retracer, gl_dir, user_display, stream_path, log_path);
+  std::optional<PrivateXServer> x;
+  if (!xvfb.empty()) x.emplace(xvfb);
+  const std::string display = x ? x->display() : std::string(user_display);
+  auto replay = [&](uint64_t max_records, double records_per_pixel) {
+    const int status =
+        runRetracer(o, max_records, records_per_pixel, retracer, gl_dir, display, stream_path, log_path);
+    return readStream(o, retracer, interposer, status, stream_path, log_path);
+  };
+  ApitraceResult result = replay(o.max_records_per_draw, o.records_per_pixel);
+  // A draw that outgrew the buffer sized to the frame (it has blended already and
+  // cannot be drawn again): replay the trace once more with room for the largest
+  // such draw, so the frames hold every draw that fits GL's largest block or
+  // --max-records-per-draw (the overflowing draws' counts are exact: the shader
+  // counts past the capacity).
+  uint64_t need = 0;
+  for (const FrameCapture& f : result.frames)
+    for (const UncapturedDraw& u : f.uncaptured)
+      if (u.reason == st::kOverflow) need = std::max(need, u.fragments);
+  const uint64_t ceiling = o.max_records_per_draw ? std::min(o.max_records_per_draw, result.record_limit)
+                                                  : result.record_limit;
+  if (need > result.record_capacity && result.record_capacity < ceiling) {
+    const uint64_t first_capacity = result.record_capacity;
+    result = replay(std::min(need, ceiling), 0);
+    result.replays = 2;
+    result.first_record_capacity = first_capacity;
   }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+namespace {
+
+ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer, const std::string& interposer,
+                          int status, const std::string& stream_path, const std::string& log_path) {
   ApitraceResult result;
   result.renderer_log = readFile(log_path);
-  const std::string data = readFile(stream_path);
+  const MappedStream data(stream_path);
   const std::string log_tail = tail(result.renderer_log, 3);
   auto retracerFailed = [&](const std::string& what) {
     return std::runtime_error(fmt::format("{}: {} {}{}", o.trace, retracer, what,
@@ -388,8 +516,9 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
     throw retracerFailed(fmt::format("was killed by signal {}", WTERMSIG(status)));
   }
 
-  StreamReader in(data, o.trace);
+  StreamReader in(data.data(), data.size(), o.trace);
   in.take<st::StreamHeader>();
+  const std::unordered_map<uint32_t, uint64_t> frame_records = recordsPerFrame(data.data(), data.size());
   FrameCapture cur;
   bool have_frame = false;
   std::optional<st::EndChunk> end;
@@ -399,6 +528,7 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
     cur.frame = frame;
     cur.header.version = 2;
     cur.header.encoding = ColourEncoding::Fp32;
+    if (auto it = frame_records.find(frame); it != frame_records.end()) reserveFragments(cur.fragments, it->second);
     have_frame = true;
   };
   while (!in.done() && !end) {
@@ -465,8 +595,11 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
         o.first_frame, o.last_frame, frames, frames == 1 ? "" : "s", frames ? frames - 1 : 0,
         frames == 0 ? "; no frame was presented (an EGL trace? the capture replays GLX traces; or the retracer failed: " + log_tail + ")" : ""));
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.record_capacity = end->record_capacity;
+  result.record_limit = end->record_limit;
   return result;
 }
+
+}  // namespace
 
 }  // namespace oit::capture

@@ -22,6 +22,10 @@ struct ApitraceOptions {
   uint32_t first_frame = 0, last_frame = 0;  // swap-buffer counts, inclusive
   bool verify = false;              // GL's own blend and count of the transparent draws
   uint64_t max_records_per_draw = 0;  // 0 = the largest shader storage block
+  // The record buffer first holds this many records per pixel of the frame (at most
+  // the above); a draw that outgrows it makes the capture replay the trace once more
+  // with room for it. 0 = the maximum from the start.
+  double records_per_pixel = 2;
   std::string retracer;             // "" = glretrace on PATH
   std::string interposer;           // "" = liboitsim_interposer.so next to this executable
 };
@@ -64,7 +68,11 @@ struct FrameCapture {
 struct ApitraceResult {
   std::vector<FrameCapture> frames;
   std::string renderer_log;  // the retracer's output (stdout and stderr)
-  double seconds = 0;        // retracer run + reading + sorting
+  double seconds = 0;        // retracer run(s) + reading + sorting
+  uint32_t replays = 1;      // 2 when a draw outgrew the first record buffer
+  uint64_t first_record_capacity = 0;  // the first run's record buffer (records), with replays = 2
+  uint64_t record_capacity = 0;        // the record buffer of the run kept (records; 0: nothing recorded)
+  uint64_t record_limit = 0;           // records GL's largest storage block holds (0: not asked)
 };
 
 // Throws std::invalid_argument naming the file when it is not an apitrace trace

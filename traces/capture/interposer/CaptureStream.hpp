@@ -7,7 +7,9 @@
 //   kDraw:  DrawChunk, then DrawChunk::records GpuRecords (only when captured)
 //   kFrame: FrameChunk at each swap of a frame in the range
 //   kError: text (a program that fails to link after rewriting, a GL failure)
-//   kEnd:   EndChunk when the retracer exits or the range is done
+//   kEnd:   EndChunk when the retracer exits or the range is done (with the record
+//           buffer's capacity: a draw that overflowed a buffer sized by
+//           OITSIM_RECORDS_PER_PIXEL is captured again with a larger one)
 //   kVerify: FrameChunk, then width x height RGBA float (GL's blend of the frame's
 //           transparent draws into an RGBA32F target cleared to 0) and width x height
 //           u32 (fragments per pixel counted by the same second drawing), before kFrame
@@ -115,6 +117,8 @@ struct FrameChunk {
 struct EndChunk {
   uint32_t frames_seen;   // swaps replayed before the retracer stopped
   uint32_t range_done;    // 1 when the last frame of the range was completed
+  uint64_t record_capacity;  // records the record buffer held (0: no draw was recorded)
+  uint64_t record_limit;     // records the largest shader storage block holds (0: not asked)
 };
 
 // One record as the injected fragment code stores it (std430): 32 bytes.

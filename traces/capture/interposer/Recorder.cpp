@@ -40,6 +40,7 @@ Recorder::Recorder() {
   last_ = b;
   verify_ = std::getenv("OITSIM_VERIFY") && std::strcmp(std::getenv("OITSIM_VERIFY"), "1") == 0;
   if (const char* m = std::getenv("OITSIM_MAX_RECORDS")) max_records_ = std::strtoull(m, nullptr, 10);
+  if (const char* k = std::getenv("OITSIM_RECORDS_PER_PIXEL")) records_per_pixel_ = std::strtod(k, nullptr);
   StreamHeader h{};
   std::memcpy(h.magic, kMagic, sizeof h.magic);
   h.first_frame = first_;
@@ -58,7 +59,7 @@ void Recorder::write(uint32_t tag, const void* payload, uint32_t bytes, const vo
 void Recorder::finishStream(bool range_done) {
   if (!active_ || ended_) return;
   ended_ = true;
-  const EndChunk e{frame_, range_done ? 1u : 0u};
+  const EndChunk e{frame_, range_done ? 1u : 0u, capacity_, limit_};
   write(kEnd, &e, sizeof e);
   std::fclose(out_);
   out_ = nullptr;
@@ -339,8 +340,16 @@ void Recorder::arm(Pending& p) {
   if (!record_buffer_) {
     GLint64 max_block = 0;
     g.glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-    const uint64_t limit = (static_cast<uint64_t>(max_block) - kRecordHeaderBytes) / sizeof(GpuRecord);
-    capacity_ = max_records_ ? std::min(max_records_, limit) : limit;
+    limit_ = (static_cast<uint64_t>(max_block) - kRecordHeaderBytes) / sizeof(GpuRecord);
+    capacity_ = max_records_ ? std::min(max_records_, limit_) : limit_;
+    // llvmpipe zero-fills the whole buffer when it is created: at GL's largest
+    // block (128 MiB on Mesa 22) the kernel's zeroing of its pages was the
+    // retracer's largest cost. Sized to the frame instead; a draw that outgrows it
+    // is reported as overflowing, with its count, and oitsim captures again with
+    // room for it (ApitraceCapture.cpp).
+    if (records_per_pixel_ > 0)
+      capacity_ = std::min(capacity_, std::max<uint64_t>(1, static_cast<uint64_t>(records_per_pixel_ * frame_w_ *
+                                                                                   double(frame_h_))));
     GLint saved = 0;
     g.glGetIntegerv(GL_COPY_WRITE_BUFFER_BINDING, &saved);
     g.glGenBuffers(1, &record_buffer_);
