@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace oit::capture {
@@ -33,13 +34,24 @@ std::vector<uint32_t> apiOrder(size_t n, KeyOf&& key);
 std::vector<uint32_t> apiOrderOfKeys(const std::vector<RecordKey>& keys);
 
 namespace detail {
-// Radix-sorts (key, index) pairs whose keys use only the low `bits` bits.
 struct KeyIndex {
   uint64_t key;
   uint32_t index;
 };
-void radixSort(std::vector<KeyIndex>& items, std::vector<KeyIndex>& scratch, unsigned bits);
+// Two uninitialised arrays of n items (no zero fill: every item is written before
+// it is read), on transparent huge pages where the kernel offers them.
+struct KeyIndexBuffers {
+  explicit KeyIndexBuffers(size_t n);
+  std::unique_ptr<KeyIndex[]> items, scratch;
+  size_t n;
+};
+// Radix-sorts b.items (the sorted items end in b.items) whose keys use only the
+// low `bits` bits.
+void radixSort(KeyIndexBuffers& b, unsigned bits);
 unsigned bitWidth(uint64_t v);
+// Asks for transparent huge pages for the whole 2 MiB pages inside [p, p + bytes)
+// (THP "madvise" mode); changes nothing where THP is off.
+void adviseHugePages(const void* p, size_t bytes);
 }  // namespace detail
 
 template <typename KeyOf>
@@ -56,15 +68,15 @@ std::vector<uint32_t> apiOrder(size_t n, KeyOf&& key) {
   }
   const unsigned xb = detail::bitWidth(max_x), yb = detail::bitWidth(max_y);
   const unsigned pb = n ? detail::bitWidth(uint64_t(max_prim) - min_prim) : 0;
-  std::vector<detail::KeyIndex> items(n), scratch(n);
+  detail::KeyIndexBuffers b(n);
   for (size_t i = 0; i < n; ++i) {
     const RecordKey k = key(i);
-    items[i] = {(uint64_t(k.prim - min_prim) << (xb + yb)) | (uint64_t(k.xy >> 16) << xb) | (k.xy & 0xFFFF),
-                static_cast<uint32_t>(i)};
+    b.items[i] = {(uint64_t(k.prim - min_prim) << (xb + yb)) | (uint64_t(k.xy >> 16) << xb) | (k.xy & 0xFFFF),
+                  static_cast<uint32_t>(i)};
   }
-  detail::radixSort(items, scratch, pb + xb + yb);
+  detail::radixSort(b, pb + xb + yb);
   std::vector<uint32_t> order(n);
-  for (size_t i = 0; i < n; ++i) order[i] = items[i].index;
+  for (size_t i = 0; i < n; ++i) order[i] = b.items[i].index;
   return order;
 }
 

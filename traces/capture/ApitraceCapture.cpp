@@ -102,7 +102,7 @@ class PrivateXServer {
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0)
       throw std::runtime_error(fmt::format("cannot create a pipe for Xvfb: {}", std::strerror(errno)));
-    std::vector<std::string> args = {xvfb, "-displayfd", "3", "-nolisten", "tcp", "-screen", "0", "1920x1080x24"};
+    std::vector<std::string> args = {xvfb, "-displayfd", "3", "-nolisten", "tcp", "-noreset", "-screen", "0", "1920x1080x24"};
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -130,6 +130,11 @@ class PrivateXServer {
     display_ = ":" + number;
   }
   ~PrivateXServer() { stop(); }
+  // Asks the server to exit without waiting for it (the destructor reaps it).
+  void terminate() {
+    if (pid_ > 0 && !terminated_) ::kill(pid_, SIGTERM);
+    terminated_ = true;
+  }
   PrivateXServer(const PrivateXServer&) = delete;
   PrivateXServer& operator=(const PrivateXServer&) = delete;
   const std::string& display() const { return display_; }
@@ -137,13 +142,14 @@ class PrivateXServer {
  private:
   void stop() {
     if (pid_ <= 0) return;
-    ::kill(pid_, SIGTERM);
+    if (!terminated_) ::kill(pid_, SIGTERM);
     int status = 0;
     while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
     }
     pid_ = 0;
   }
   pid_t pid_ = 0;
+  bool terminated_ = false;
   std::string display_;
 };
 
@@ -287,9 +293,12 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   const std::vector<uint32_t> order =
       apiOrder(d.records, [&](size_t i) { return RecordKey{recs[i].prim, recs[i].xy}; });
   const size_t first = f.fragments.size();
-  for (const uint32_t i : order) {
+  // The records are read in key order, scattered over the stream: fetch ahead.
+  constexpr size_t kAhead = 16;
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (j + kAhead < order.size()) __builtin_prefetch(&recs[order[j + kAhead]]);
     Fragment frag;
-    toFragment(recs[i], d, f, frag);
+    toFragment(recs[order[j]], d, f, frag);
     f.fragments.push_back(frag);
   }
   // Instances and sub-draws restart primitive ids (and a geometry shader may not
@@ -335,12 +344,15 @@ class StreamReader {
 // glmark2 frame) into a zero-filled string first.
 class MappedStream {
  public:
-  explicit MappedStream(const std::string& path) {
+  // populate: map every page at once (for a full read; a scan of the chunk headers
+  // touches few of them).
+  MappedStream(const std::string& path, bool populate) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) return;  // no stream: the caller reports the retracer's failure
     struct stat sb{};
     if (::fstat(fd, &sb) == 0 && sb.st_size > 0) {
-      void* p = ::mmap(nullptr, static_cast<size_t>(sb.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+      void* p = ::mmap(nullptr, static_cast<size_t>(sb.st_size), PROT_READ,
+                       MAP_PRIVATE | (populate ? MAP_POPULATE : 0), fd, 0);
       if (p != MAP_FAILED) {
         data_ = static_cast<const char*>(p);
         size_ = static_cast<uint64_t>(sb.st_size);
@@ -361,18 +373,34 @@ class MappedStream {
   uint64_t size_ = 0;
 };
 
-// Records of recorded draws per frame, from the chunk headers alone (a malformed
-// stream is left to the full pass to report), so each frame's fragments take one
-// allocation.
-std::unordered_map<uint32_t, uint64_t> recordsPerFrame(const char* data, uint64_t size) {
-  std::unordered_map<uint32_t, uint64_t> n;
+// What the chunk headers alone say (a malformed stream is left to the full pass to
+// report): the records of recorded draws per frame, so each frame's fragments take
+// one allocation; the largest draw that overflowed the record buffer; the buffer.
+struct StreamScan {
+  std::unordered_map<uint32_t, uint64_t> records;
+  uint64_t overflow_need = 0;  // fragments of the largest draw that overflowed
+  uint64_t record_capacity = 0, record_limit = 0;  // EndChunk's
+};
+
+StreamScan scanStream(const char* data, uint64_t size) {
+  StreamScan s;
   uint64_t pos = sizeof(st::StreamHeader);
+  if (size < pos) return s;
   while (size - pos >= sizeof(st::ChunkHeader)) {
     st::ChunkHeader c;
     std::memcpy(&c, data + pos, sizeof c);
     pos += sizeof c;
+    if (c.tag == st::kEnd) {
+      st::EndChunk e;
+      if (size - pos >= sizeof e) {
+        std::memcpy(&e, data + pos, sizeof e);
+        s.record_capacity = e.record_capacity;
+        s.record_limit = e.record_limit;
+      }
+      break;
+    }
     if (c.tag != st::kDraw) {
-      if (c.tag == st::kEnd || c.tag == st::kError) break;
+      if (c.tag == st::kError) break;
       if (c.tag == st::kVerify) {
         st::FrameChunk f;
         if (size - pos < sizeof f) break;
@@ -390,9 +418,10 @@ std::unordered_map<uint32_t, uint64_t> recordsPerFrame(const char* data, uint64_
     pos += sizeof d;
     if (d.records > (size - pos) / sizeof(st::GpuRecord)) break;
     pos += d.records * sizeof(st::GpuRecord);
-    if (d.reason == st::kCaptured && d.state.blend_mode <= st::kBlendPremulOver) n[d.frame] += d.records;
+    if (d.reason == st::kCaptured && d.state.blend_mode <= st::kBlendPremulOver) s.records[d.frame] += d.records;
+    if (d.reason == st::kOverflow) s.overflow_need = std::max(s.overflow_need, d.fragments);
   }
-  return n;
+  return s;
 }
 
 // Room for `n` fragments in one allocation, backed by transparent huge pages where
@@ -400,11 +429,7 @@ std::unordered_map<uint32_t, uint64_t> recordsPerFrame(const char* data, uint64_
 // fragments was a fifth of oitsim's CPU time on the glmark2 frame.
 void reserveFragments(std::vector<Fragment>& v, uint64_t n) {
   v.reserve(n);
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  const auto begin = reinterpret_cast<uintptr_t>(v.data());
-  const uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t last = (begin + n * sizeof(Fragment)) & ~(kHuge - 1);
-  if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  detail::adviseHugePages(v.data(), n * sizeof(Fragment));
 }
 
 // Reads the interposer's stream of one retracer run into frames.
@@ -470,27 +495,29 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
   if (!xvfb.empty()) x.emplace(xvfb);
   const std::string display = x ? x->display() : std::string(user_display);
   auto replay = [&](uint64_t max_records, double records_per_pixel) {
-    const int status =
-        runRetracer(o, max_records, records_per_pixel, retracer, gl_dir, display, stream_path, log_path);
-    return readStream(o, retracer, interposer, status, stream_path, log_path);
+    return runRetracer(o, max_records, records_per_pixel, retracer, gl_dir, display, stream_path, log_path);
   };
-  ApitraceResult result = replay(o.max_records_per_draw, o.records_per_pixel);
+  int status = replay(o.max_records_per_draw, o.records_per_pixel);
   // A draw that outgrew the buffer sized to the frame (it has blended already and
   // cannot be drawn again): replay the trace once more with room for the largest
   // such draw, so the frames hold every draw that fits GL's largest block or
   // --max-records-per-draw (the overflowing draws' counts are exact: the shader
   // counts past the capacity).
-  uint64_t need = 0;
-  for (const FrameCapture& f : result.frames)
-    for (const UncapturedDraw& u : f.uncaptured)
-      if (u.reason == st::kOverflow) need = std::max(need, u.fragments);
-  const uint64_t ceiling = o.max_records_per_draw ? std::min(o.max_records_per_draw, result.record_limit)
-                                                  : result.record_limit;
-  if (need > result.record_capacity && result.record_capacity < ceiling) {
-    const uint64_t first_capacity = result.record_capacity;
-    result = replay(std::min(need, ceiling), 0);
+  StreamScan first;
+  {
+    const MappedStream data(stream_path, false);
+    first = scanStream(data.data(), data.size());
+  }
+  const uint64_t ceiling =
+      o.max_records_per_draw ? std::min(o.max_records_per_draw, first.record_limit) : first.record_limit;
+  const bool again = first.overflow_need > first.record_capacity && first.record_capacity < ceiling;
+  if (again) status = replay(std::min(first.overflow_need, ceiling), 0);
+  // The X server stops while the stream is read (reaped when `x` goes).
+  if (x) x->terminate();
+  ApitraceResult result = readStream(o, retracer, interposer, status, stream_path, log_path);
+  if (again) {
     result.replays = 2;
-    result.first_record_capacity = first_capacity;
+    result.first_record_capacity = first.record_capacity;
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
@@ -502,7 +529,7 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
                           int status, const std::string& stream_path, const std::string& log_path) {
   ApitraceResult result;
   result.renderer_log = readFile(log_path);
-  const MappedStream data(stream_path);
+  const MappedStream data(stream_path, true);
   const std::string log_tail = tail(result.renderer_log, 3);
   auto retracerFailed = [&](const std::string& what) {
     return std::runtime_error(fmt::format("{}: {} {}{}", o.trace, retracer, what,
@@ -518,7 +545,7 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
 
   StreamReader in(data.data(), data.size(), o.trace);
   in.take<st::StreamHeader>();
-  const std::unordered_map<uint32_t, uint64_t> frame_records = recordsPerFrame(data.data(), data.size());
+  const std::unordered_map<uint32_t, uint64_t> frame_records = scanStream(data.data(), data.size()).records;
   FrameCapture cur;
   bool have_frame = false;
   std::optional<st::EndChunk> end;
