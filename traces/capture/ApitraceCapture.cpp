@@ -272,6 +272,36 @@ bool apiLess(const Fragment& a, const Fragment& b) {
   return a.a < b.a;
 }
 
+// Appends a draw's records to `out` in API order, converted as a trace holds them
+// (what conversion changed is counted in `f`).
+void appendInApiOrder(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f, std::vector<Fragment>& out) {
+  // Threads append in any order. API order within a draw: primitive, then pixel
+  // rows bottom-up, then x (as oitsim gen and the mesh capture emit), by a radix
+  // sort of the keys (ApiOrder.hpp); the records are converted in that order.
+  const std::vector<uint32_t> order =
+      apiOrder(d.records, [&](size_t i) { return RecordKey{recs[i].prim, recs[i].xy}; });
+  const size_t first = out.size();
+  // The records are read in key order, scattered over the stream: fetch ahead.
+  constexpr size_t kAhead = 16;
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (j + kAhead < order.size()) __builtin_prefetch(&recs[order[j + kAhead]]);
+    Fragment frag;
+    toFragment(recs[order[j]], d, f, frag);
+    out.push_back(frag);
+  }
+  // Instances and sub-draws restart primitive ids (and a geometry shader may not
+  // write one): their fragments at one pixel (equal keys, left in thread order by
+  // the stable sort) are ordered by depth and colour, deterministic but not
+  // necessarily the instances' order.
+  auto run = out.begin() + static_cast<std::ptrdiff_t>(first);
+  while (run != out.end()) {
+    auto end = run + 1;
+    while (end != out.end() && end->prim == run->prim && end->y == run->y && end->x == run->x) ++end;
+    if (end - run > 1) std::sort(run, end, apiLess);
+    run = end;
+  }
+}
+
 // Appends one captured draw's records to the frame in API order.
 void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f) {
   const auto mode = static_cast<BlendMode>(d.state.blend_mode);
@@ -286,32 +316,9 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   f.fragments_by_mode[d.state.blend_mode] += d.records;
   if (!d.state.early_tests) ++f.late_depth_draws;
   if (d.instanced) ++f.multi_draws;
+  if (d.window) f.window_draws.push_back(d.index);
   if (!info.state->recorded()) return;  // listed, not modelled: its fragments stay out
-  // Threads append in any order. API order within a draw: primitive, then pixel
-  // rows bottom-up, then x (as oitsim gen and the mesh capture emit), by a radix
-  // sort of the keys (ApiOrder.hpp); the records are converted in that order.
-  const std::vector<uint32_t> order =
-      apiOrder(d.records, [&](size_t i) { return RecordKey{recs[i].prim, recs[i].xy}; });
-  const size_t first = f.fragments.size();
-  // The records are read in key order, scattered over the stream: fetch ahead.
-  constexpr size_t kAhead = 16;
-  for (size_t j = 0; j < order.size(); ++j) {
-    if (j + kAhead < order.size()) __builtin_prefetch(&recs[order[j + kAhead]]);
-    Fragment frag;
-    toFragment(recs[order[j]], d, f, frag);
-    f.fragments.push_back(frag);
-  }
-  // Instances and sub-draws restart primitive ids (and a geometry shader may not
-  // write one): their fragments at one pixel (equal keys, left in thread order by
-  // the stable sort) are ordered by depth and colour, deterministic but not
-  // necessarily the instances' order.
-  auto run = f.fragments.begin() + static_cast<std::ptrdiff_t>(first);
-  while (run != f.fragments.end()) {
-    auto end = run + 1;
-    while (end != f.fragments.end() && end->prim == run->prim && end->y == run->y && end->x == run->x) ++end;
-    if (end - run > 1) std::sort(run, end, apiLess);
-    run = end;
-  }
+  appendInApiOrder(d, recs, f, f.fragments);
 }
 
 class StreamReader {
@@ -547,11 +554,14 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
   in.take<st::StreamHeader>();
   const std::unordered_map<uint32_t, uint64_t> frame_records = scanStream(data.data(), data.size()).records;
   FrameCapture cur;
+  std::vector<Fragment> check;  // the check drawing's records of the frame (--verify)
+  FrameCapture check_counts;    // what converting them changed (not reported)
   bool have_frame = false;
   std::optional<st::EndChunk> end;
   auto startFrame = [&](uint32_t frame) {
     if (have_frame && cur.frame == frame) return;
     cur = FrameCapture{};
+    check.clear();
     cur.frame = frame;
     cur.header.version = 2;
     cur.header.encoding = ColourEncoding::Fp32;
@@ -574,6 +584,13 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
         }
         break;
       }
+      case st::kCheckDraw: {
+        const st::DrawChunk d = *in.take<st::DrawChunk>();
+        const st::GpuRecord* recs = in.take<st::GpuRecord>(d.records);
+        startFrame(d.frame);
+        if (d.reason == st::kCaptured) appendInApiOrder(d, recs, check_counts, check);
+        break;
+      }
       case st::kVerify: {
         const st::FrameChunk f = *in.take<st::FrameChunk>();
         startFrame(f.frame);
@@ -585,6 +602,8 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
         const uint32_t* count = in.take<uint32_t>(px);
         ref.rgba.assign(rgba, rgba + px * 4);
         ref.count.assign(count, count + px);
+        ref.fragments = std::move(check);
+        check.clear();
         cur.reference = std::move(ref);
         break;
       }

@@ -42,11 +42,13 @@ struct UncapturedDraw {
 
 // GL's images of a frame's transparent draws (--verify): RGBA32F cleared to 0, the
 // draws blended with the application's own blend state and depth buffer, and the
-// fragments per pixel counted by that second drawing. Row 0 is the bottom row.
+// fragments per pixel counted by that second drawing (the check drawing), with
+// the records it made. Row 0 is the bottom row.
 struct GlTransparentReference {
   uint32_t width = 0, height = 0;
   std::vector<float> rgba;
   std::vector<uint32_t> count;
+  std::vector<Fragment> fragments;  // the check drawing's records, API order, as a trace holds them
 };
 
 struct FrameCapture {
@@ -58,6 +60,7 @@ struct FrameCapture {
   std::array<uint64_t, 6> draws_by_mode{}, fragments_by_mode{};  // captured, by BlendMode
   uint64_t late_depth_draws = 0;    // programs that discard or write depth: recorded before the depth test
   uint64_t multi_draws = 0;         // instanced or multi-draw calls: primitive ids restart per instance
+  std::vector<uint32_t> window_draws;  // captured draws drawn into the window, not a framebuffer object
   uint64_t colour_clamped = 0;      // colour outside [0,1] or not finite, clamped (NaN -> 0)
   uint64_t depth_clamped = 0;       // depth written outside [0,1] or not finite, clamped
   uint64_t premultiplied_zero_alpha = 0;  // premultiplied colour over alpha 0: straight colour unknown, 0

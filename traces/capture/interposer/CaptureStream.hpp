@@ -13,6 +13,9 @@
 //   kVerify: FrameChunk, then width x height RGBA float (GL's blend of the frame's
 //           transparent draws into an RGBA32F target cleared to 0) and width x height
 //           u32 (fragments per pixel counted by the same second drawing), before kFrame
+//   kCheckDraw: DrawChunk + records, as kDraw, of that second drawing (the check
+//           drawing) of one draw, before the draw's own kDraw: the records GL
+//           blended into the kVerify image
 #pragma once
 
 #include <cstdint>
@@ -26,7 +29,7 @@ struct StreamHeader {
   uint32_t first_frame, last_frame;  // the range asked for (swap-buffer counts)
 };
 
-enum ChunkTag : uint32_t { kDraw = 1, kFrame = 2, kError = 3, kEnd = 4, kVerify = 5 };
+enum ChunkTag : uint32_t { kDraw = 1, kFrame = 2, kError = 3, kEnd = 4, kVerify = 5, kCheckDraw = 6 };
 
 struct ChunkHeader {
   uint32_t tag;
@@ -101,7 +104,8 @@ struct DrawChunk {
   uint32_t program;     // current program object (0 = none)
   uint32_t width, height;  // size of the render target (0 when unknown)
   uint32_t instanced;   // the call draws instances or several sub-draws (primitive ids restart)
-  uint32_t pad;
+  uint32_t window;      // 1: drawn into the window (framebuffer 0), whose depth llvmpipe interpolates
+                        // from the other edge (CAPTURE.md: within 2 ulp of an FBO's)
   uint64_t fragments;   // fragments the shader counted (also when not recorded, e.g. overflow)
   uint64_t records;     // GpuRecords that follow (0 unless captured)
   DrawState state;

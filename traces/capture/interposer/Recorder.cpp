@@ -214,6 +214,7 @@ uint32_t Recorder::classify(Pending& p, GLint program) {
 
   GLint fb = 0;
   g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &fb);
+  p.chunk.window = fb == 0 ? 1 : 0;
   GLint max_buffers = 1;
   g.glGetIntegerv(GL_MAX_DRAW_BUFFERS, &max_buffers);
   int active = 0;
@@ -369,12 +370,7 @@ void Recorder::arm(Pending& p) {
   g.glProgramUniform1ui(prog, p.info->loc_mode, 1);
 }
 
-void Recorder::finish(Pending& p) {
-  DrawChunk& c = p.chunk;
-  if (c.reason != kCaptured) {
-    write(kDraw, &c, sizeof c);
-    return;
-  }
+void Recorder::takeRecords(const Pending& p, DrawChunk c, uint32_t tag) {
   RealGl& g = gl();
   g.glProgramUniform1ui(c.program, p.info->loc_mode, 0);
   restoreStorage(record_binding_, p.records);  // bound only for the draw
@@ -384,16 +380,24 @@ void Recorder::finish(Pending& p) {
   c.fragments = count;
   if (count > capacity_) {
     c.reason = kOverflow;
-    write(kDraw, &c, sizeof c);
+    write(tag, &c, sizeof c);
     return;
   }
   c.records = count;
   // Straight from the mapping to the stream: a copy in between cost a 46 MB
   // allocation and its page faults per draw on the glmark2 frame.
   const auto bytes = static_cast<GLsizeiptr>(uint64_t(count) * sizeof(GpuRecord));
-  if (bytes == 0) write(kDraw, &c, sizeof c);
+  if (bytes == 0) write(tag, &c, sizeof c);
   mapBuffer(record_buffer_, kRecordHeaderBytes, bytes,
-            [&](const void* records) { write(kDraw, &c, sizeof c, records, static_cast<uint64_t>(bytes)); });
+            [&](const void* records) { write(tag, &c, sizeof c, records, static_cast<uint64_t>(bytes)); });
+}
+
+void Recorder::finish(Pending& p) {
+  if (p.chunk.reason != kCaptured) {
+    write(kDraw, &p.chunk, sizeof p.chunk);
+    return;
+  }
+  takeRecords(p, p.chunk, kDraw);
 }
 
 void Recorder::swap() {

@@ -38,7 +38,8 @@ class Recorder {
   void afterLink(GLuint program);
   void forgetProgram(GLuint program);
 
-  // One draw call: `call` issues it (possibly twice: the verify drawing first).
+  // One draw call: `call` issues it (possibly twice: the verify drawing, which
+  // counts and records, first).
   template <typename Call>
   void draw(const char* function, bool multi, Call&& call) {
     Pending p;
@@ -81,7 +82,11 @@ class Recorder {
   bool begin(const char* function, bool multi, Pending& p);
   void readState(Pending& p);
   uint32_t classify(Pending& p, GLint program);
+  // Binds the record buffer (counter cleared) and turns recording on for the draw.
   void arm(Pending& p);
+  // Turns recording off and writes the draw's records as a chunk `tag` (kDraw, or
+  // kCheckDraw for the verify drawing), or the draw as overflowing.
+  void takeRecords(const Pending& p, stream::DrawChunk c, uint32_t tag);
   void finish(Pending& p);
   void enterVerify(Pending& p);
   void leaveVerify(Pending& p);
