@@ -52,11 +52,11 @@ VerifyResult verifyTrace(const std::string& path, const GlReference& ref);
 //     drawing: equal.
 //  3. drawings: the trace's transparent fragments (the application's drawing)
 //     against the check drawing's records, one to one in API order: the same
-//     draw, primitive, pixel and depth, bit for bit, except the depth of a draw
-//     into the window: llvmpipe keeps window buffers upside down and interpolates
-//     depth from the other edge, so it differs from the check drawing's (an FBO)
-//     by rounding that grows with the triangle's depth slope: within
-//     kWindowDepthBound (measured: at most 2 ulp on the test cube, 80 ulp = 4.8e-6
+//     draw, primitive, pixel and depth, bit for bit, except for a draw into the
+//     window: llvmpipe keeps window buffers upside down, so its fill rule gives a
+//     pixel on a horizontal shared edge to the other triangle (allowed and
+//     counted), and it interpolates depth from the other edge, a rounding that
+//     grows with the triangle's depth slope: within kWindowDepthBound (measured: at most 2 ulp on the test cube, 80 ulp = 4.8e-6
 //     on the glmark2 jellyfish; the depth test's outcome is checked exactly by the
 //     counts); colours within kDrawingColourBound. llvmpipe compiles a shader variant per render-target
 //     format, so the application's drawing (usually into an 8-bit target) and the
@@ -68,6 +68,7 @@ struct TransparentVerifyResult : VerifyResult {
   uint64_t clamped = 0;        // premultiplied fragments whose straight colour the trace clamped
   uint64_t check_fragments = 0;     // records of the check drawing
   uint64_t drawing_mismatches = 0;  // trace fragments not at the check drawing's draw, primitive, pixel, depth
+  uint64_t primitive_differing = 0; // window-draw fragments the two drawings give to another primitive
   uint64_t depth_differing = 0;     // trace fragments drawn into the window with another depth
   double max_depth_diff = 0;        // largest |trace - check drawing| depth of those fragments
   uint64_t colour_differing = 0;    // trace fragments whose rgba differs from the check drawing's

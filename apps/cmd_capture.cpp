@@ -122,14 +122,15 @@ void runApitraceCapture(const CaptureArgs& a) {
         "  verify frame {}: GL's check drawing of the {} transparent fragments, its records replayed with alpha vs "
         "its blend (RGBA32F): {} of {} channels differ (max {} ulp, {:.3g} abs); per-pixel counts: {} of {} pixels "
         "differ{}{}; the trace vs the check drawing: {} of {} fragments at another draw, primitive, pixel or depth, "
-        "{} drawn into the window with another depth (max {:.3g}, bound {:.3g}), {} with another colour (max "
+        "{} drawn into the window given to another primitive (a shared edge) and {} with another depth (max "
+        "{:.3g}, bound {:.3g}), {} with another colour (max "
         "{:.3g}, bound {:.3g}){}",
         f.frame, v.check_fragments, v.channels_differing, v.channels_compared, v.max_ulps, v.max_abs,
         v.count_pixels_differing, v.pixels, v.first_difference.empty() ? "" : "; first: " + v.first_difference,
         v.clamped ? fmt::format(" ({} premultiplied colours above their alpha, clamped for the trace: colours not compared)",
                               v.clamped)
                   : "",
-        v.drawing_mismatches, v.fragments, v.depth_differing, v.max_depth_diff,
+        v.drawing_mismatches, v.fragments, v.primitive_differing, v.depth_differing, v.max_depth_diff,
         capture::TransparentVerifyResult::kWindowDepthBound,
         v.colour_differing, v.max_colour_diff,
         capture::TransparentVerifyResult::kDrawingColourBound,
