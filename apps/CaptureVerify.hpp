@@ -51,18 +51,19 @@ VerifyResult verifyTrace(const std::string& path, const GlReference& ref);
 //  2. counts: the trace's fragments per pixel against GL's count of the check
 //     drawing: equal.
 //  3. drawings: the trace's transparent fragments (the application's drawing)
-//     against the check drawing's records, one to one in API order: the same
+//     against the check drawing's records, paired per draw and pixel: the same
 //     draw, primitive, pixel and depth, bit for bit, except for a draw into the
 //     window: llvmpipe keeps window buffers upside down, so its fill rule gives a
 //     pixel on a horizontal shared edge to the other triangle (allowed and
 //     counted), and it interpolates depth from the other edge, a rounding that
-//     grows with the triangle's depth slope: within kWindowDepthBound (measured: at most 2 ulp on the test cube, 80 ulp = 4.8e-6
-//     on the glmark2 jellyfish; the depth test's outcome is checked exactly by the
-//     counts); colours within kDrawingColourBound. llvmpipe compiles a shader variant per render-target
+//     grows with the triangle's depth slope: within kWindowDepthBound (measured:
+//     at most 2 ulp on the test cube, 5.1e-6 on the glmark2 jellyfish; the depth
+//     test's outcome is checked exactly by the counts). Colours within
+//     kDrawingColourBound: llvmpipe compiles a shader variant per render-target
 //     format, so the application's drawing (usually into an 8-bit target) and the
 //     check drawing (RGBA32F) need not shade alike: its 8-bit texture filtering
 //     (the "AoS" path) runs only for 8-bit targets; measured on the glmark2
-//     jellyfish at most 0.0100 (traces/CAPTURE.md), 0 on untextured programs.
+//     jellyfish at most 0.0103 (traces/CAPTURE.md), 0 on untextured programs.
 struct TransparentVerifyResult : VerifyResult {
   bool premultiplied = false;  // the frame has premultiplied-over draws
   uint64_t clamped = 0;        // premultiplied fragments whose straight colour the trace clamped
