@@ -125,6 +125,12 @@ class ApitraceCapture : public ::testing::Test {
     o.interposer = std::string(OITSIM_BINARY_DIR) + "/apps/liboitsim_interposer.so";
     return o;
   }
+  // Frame 1 of the trace captured with --verify (GL's check drawing, its records).
+  ApitraceResult verifiedCapture(const std::string& trace) const {
+    ApitraceOptions o = options(trace, 1);
+    o.verify = true;
+    return captureApitrace(o);
+  }
   // The mesh capture's fragments as draw `draw`, kept where keep(fragment) holds.
   template <typename Keep>
   std::vector<Fragment> expected(uint32_t draw, Keep keep) const {
@@ -259,9 +265,7 @@ TEST_F(ApitraceCapture, EveryDrawKindMatchesTheMeshCapture) {
 // application draws into its window (no FBO).
 TEST_F(ApitraceCapture, VerifyAndCommandLine) {
   const std::string trace = traceApp({"glsl120 over off", "glsl330 over test", "discard over off"}, 3, false);
-  ApitraceOptions o = options(trace, 1);
-  o.verify = true;
-  const ApitraceResult r = captureApitrace(o);
+  const ApitraceResult r = verifiedCapture(trace);
   ASSERT_EQ(r.frames.size(), 1u);
   ASSERT_TRUE(r.frames[0].reference);
   EXPECT_EQ(sameUpToDepthUlp(ofDraw(r.frames[0], 0), expected(0)), "");
@@ -301,10 +305,8 @@ TEST_F(ApitraceCapture, VerifyAndCommandLine) {
 // do not reproduce. The application draws into a framebuffer object here, so the
 // two drawings agree bit for bit (depth included).
 TEST_F(ApitraceCapture, VerifyCatchesARealMismatch) {
-  const std::string trace = traceApp({"glsl120 over off", "glsl330 over test", "discard over off"}, 3, true);
-  ApitraceOptions o = options(trace, 1);
-  o.verify = true;
-  const ApitraceResult r = captureApitrace(o);
+  const ApitraceResult r =
+      verifiedCapture(traceApp({"glsl120 over off", "glsl330 over test", "discard over off"}, 3, true));
   ASSERT_EQ(r.frames.size(), 1u);
   const FrameCapture& good = r.frames[0];
   ASSERT_TRUE(good.reference);
