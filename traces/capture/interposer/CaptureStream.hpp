@@ -1,6 +1,6 @@
 // The stream the interposed GL library (liboitsim_interposer.so, loaded by
 // apitrace's retracer as its libGL.so.1) writes for `oitsim capture --apitrace`:
-// one file, native little-endian structs, read back by traces/capture/ApitraceCapture.cpp.
+// one file, native little-endian structs, read back by traces/capture/ApitraceStream.cpp.
 // Both sides include this header, so the layout cannot drift.
 //
 //   StreamHeader, then chunks: ChunkHeader + payload.
