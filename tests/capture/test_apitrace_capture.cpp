@@ -390,6 +390,15 @@ TEST_F(ApitraceCapture, ADrawThatOutgrowsTheFirstRecordBufferIsCapturedByASecond
   EXPECT_TRUE(r.frames[0].uncaptured.empty());
   EXPECT_TRUE(same(r.frames[0].fragments, full.frames[0].fragments))
       << firstDifference(r.frames[0].fragments, full.frames[0].fragments);
+  // The same with --verify: the check drawings' records (also in the stream) do not
+  // hide the overflow, and the second replay's frame passes the check.
+  o.verify = true;
+  const ApitraceResult checked = captureApitrace(o);
+  ASSERT_EQ(checked.frames.size(), 1u);
+  EXPECT_EQ(checked.replays, 2u);
+  EXPECT_TRUE(same(checked.frames[0].fragments, full.frames[0].fragments));
+  EXPECT_TRUE(verifyTransparentDraws(checked.frames[0]).passes());
+  o.verify = false;
   // --max-records-per-draw caps the second buffer: a draw above the cap stays listed.
   o.max_records_per_draw = 400;
   const ApitraceResult capped = captureApitrace(o);

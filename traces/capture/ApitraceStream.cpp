@@ -244,7 +244,7 @@ StreamScan scanBytes(const char* data, uint64_t size) {
       }
       break;
     }
-    if (c.tag != st::kDraw) {
+    if (c.tag != st::kDraw && c.tag != st::kCheckDraw) {
       if (c.tag == st::kError) break;
       if (c.tag == st::kVerify) {
         st::FrameChunk f;
@@ -263,6 +263,7 @@ StreamScan scanBytes(const char* data, uint64_t size) {
     pos += sizeof d;
     if (d.records > (size - pos) / sizeof(st::GpuRecord)) break;
     pos += d.records * sizeof(st::GpuRecord);
+    if (c.tag == st::kCheckDraw) continue;  // --verify's second drawing of the draw that follows
     if (d.reason == st::kCaptured && d.state.blend_mode <= st::kBlendPremulOver) s.records[d.frame] += d.records;
     if (d.reason == st::kOverflow) s.overflow_need = std::max(s.overflow_need, d.fragments);
   }
