@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "model/FunctionalRenderer.hpp"
+#include "traces/capture/ApiOrder.hpp"
 #include "model/MemorySource.hpp"
 #include "model/OitAlgorithm.hpp"
 
@@ -45,6 +47,66 @@ void compareImages(const model::Image& image, const float* gl_rgba, uint32_t wid
 
 }  // namespace
 
+namespace {
+
+std::string describe(const Fragment& f) {
+  return fmt::format("draw {} primitive {} pixel ({}, {}) depth {:.9g} rgba {:.9g} {:.9g} {:.9g} {:.9g}", f.draw, f.prim,
+                     f.x, f.y, f.z, f.r, f.g, f.b, f.a);
+}
+
+// Check 3: the application's drawing (the trace) against the check drawing, one to
+// one: fragments grouped by (draw, pixel), each list keeping its own order within a
+// group (a stable radix sort), so that a pixel both drawings give to another
+// primitive of the draw (a window draw's horizontal shared edges: llvmpipe's fill
+// rule runs in y-down coordinates there) does not shift every later pair.
+void compareDrawings(const std::vector<Fragment>& trace, const std::vector<Fragment>& check,
+                     const std::vector<uint32_t>& window_draws, TransparentVerifyResult& v) {
+  auto inWindow = [&](uint32_t draw) {
+    return std::find(window_draws.begin(), window_draws.end(), draw) != window_draws.end();
+  };
+  auto byPixel = [](const std::vector<Fragment>& f) {
+    return apiOrder(f.size(), [&](size_t i) { return RecordKey{f[i].draw, uint32_t(f[i].x) | uint32_t(f[i].y) << 16}; });
+  };
+  const std::vector<uint32_t> ta = byPixel(trace), tb = byPixel(check);
+  const size_t n = std::min(trace.size(), check.size());
+  v.drawing_mismatches = std::max(trace.size(), check.size()) - n;
+  for (size_t i = 0; i < n; ++i) {
+    const Fragment& a = trace[ta[i]];
+    const Fragment& b = check[tb[i]];
+    const bool window = inWindow(a.draw);
+    const bool same_depth = std::bit_cast<uint32_t>(a.z) == std::bit_cast<uint32_t>(b.z);
+    const double depth_diff = std::fabs(double(a.z) - b.z);
+    const bool near_depth = !same_depth && window && depth_diff <= TransparentVerifyResult::kWindowDepthBound;
+    const bool edge = a.prim != b.prim && window;
+    if (!same_depth && window) {
+      ++v.depth_differing;
+      v.max_depth_diff = std::max(v.max_depth_diff, depth_diff);
+    }
+    if (edge) ++v.primitive_differing;
+    if (a.draw != b.draw || (a.prim != b.prim && !edge) || a.x != b.x || a.y != b.y || !(same_depth || near_depth)) {
+      if (v.drawing_mismatches++ == 0)
+        v.first_drawing_difference = fmt::format("fragment {}: {} in the trace, {} in the check drawing", ta[i],
+                                                 describe(a), describe(b));
+      continue;
+    }
+    const float da[4] = {a.r, a.g, a.b, a.a}, db[4] = {b.r, b.g, b.b, b.a};
+    double worst = 0;
+    for (int c = 0; c < 4; ++c) worst = std::max(worst, std::fabs(double(da[c]) - db[c]));
+    if (std::memcmp(da, db, sizeof da) != 0) ++v.colour_differing;
+    if (worst > v.max_colour_diff) {
+      v.max_colour_diff = worst;
+      if (worst > TransparentVerifyResult::kDrawingColourBound && v.first_drawing_difference.empty())
+        v.first_drawing_difference = fmt::format("fragment {}: {} in the trace, {} in the check drawing", ta[i],
+                                                 describe(a), describe(b));
+    }
+  }
+  if (v.first_drawing_difference.empty() && trace.size() != check.size())
+    v.first_drawing_difference =
+        fmt::format("{} fragments in the trace, {} in the check drawing", trace.size(), check.size());
+}
+
+}  // namespace
+
 TransparentVerifyResult verifyTransparentDraws(const FrameCapture& frame) {
   if (!frame.reference) throw std::logic_error("verifyTransparentDraws: the frame has no GL reference");
   const GlTransparentReference& ref = *frame.reference;
@@ -69,12 +131,15 @@ TransparentVerifyResult verifyTransparentDraws(const FrameCapture& frame) {
       ++counts[static_cast<size_t>(f.y) * h.width + f.x];
     }
   v.fragments = frags.size();
+  v.check_fragments = ref.fragments.size();
   v.clamped = frame.premultiplied_clamped + frame.premultiplied_zero_alpha;
   for (size_t p = 0; p < v.pixels; ++p)
     if (counts[p] != ref.count[p] && v.count_pixels_differing++ == 0)
       v.first_difference = fmt::format("pixel ({}, {}): {} records, GL counted {}", p % h.width, p / h.width,
                                        counts[p], ref.count[p]);
-  model::MemorySource src(th, std::move(frags));
+  compareDrawings(frags, ref.fragments, frame.window_draws, v);
+  // GL blended the check drawing's fragments: replay those.
+  model::MemorySource src(th, std::vector<Fragment>(ref.fragments));
   auto algo = model::makeAlgorithm("alpha", {});
   const model::RenderResult r = model::FunctionalRenderer().render(src, *algo);
   compareImages(r.image, ref.rgba.data(), h.width, v);

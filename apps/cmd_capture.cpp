@@ -119,14 +119,22 @@ void runApitraceCapture(const CaptureArgs& a) {
     if (!a.verify) continue;
     const capture::TransparentVerifyResult v = capture::verifyTransparentDraws(f);
     verify_lines.push_back(fmt::format(
-        "  verify frame {}: its {} transparent fragments replayed with alpha vs GL's blend of the same draws "
-        "(RGBA32F): {} of {} channels differ (max {} ulp, {:.3g} abs); per-pixel counts: {} of {} pixels "
-        "differ{}{}",
-        f.frame, v.fragments, v.channels_differing, v.channels_compared, v.max_ulps, v.max_abs,
+        "  verify frame {}: GL's check drawing of the {} transparent fragments, its records replayed with alpha vs "
+        "its blend (RGBA32F): {} of {} channels differ (max {} ulp, {:.3g} abs); per-pixel counts: {} of {} pixels "
+        "differ{}{}; the trace vs the check drawing: {} of {} fragments at another draw, primitive, pixel or depth, "
+        "{} drawn into the window given to another primitive (a shared edge) and {} with another depth (max "
+        "{:.3g}, bound {:.3g}), {} with another colour (max "
+        "{:.3g}, bound {:.3g}){}",
+        f.frame, v.check_fragments, v.channels_differing, v.channels_compared, v.max_ulps, v.max_abs,
         v.count_pixels_differing, v.pixels, v.first_difference.empty() ? "" : "; first: " + v.first_difference,
         v.clamped ? fmt::format(" ({} premultiplied colours above their alpha, clamped for the trace: colours not compared)",
                               v.clamped)
-                  : ""));
+                  : "",
+        v.drawing_mismatches, v.fragments, v.primitive_differing, v.depth_differing, v.max_depth_diff,
+        capture::TransparentVerifyResult::kWindowDepthBound,
+        v.colour_differing, v.max_colour_diff,
+        capture::TransparentVerifyResult::kDrawingColourBound,
+        v.drawingsAgree() ? "" : "; first: " + v.first_drawing_difference));
     all_ok = all_ok && v.passes();
   }
   if (!all_ok) {
@@ -142,9 +150,13 @@ void runApitraceCapture(const CaptureArgs& a) {
     fmt::print("{}\n", capture::frameSummary(f, rangeFileName(a.output, f.frame, o.first_frame, o.last_frame)));
     if (a.verify) fmt::print("{}\n", verify_lines[i]);
   }
-  fmt::print("{} frame{}, {} fragments in {:.2f} s ({}fragments/s, replay included)\n", r.frames.size(),
+  fmt::print("{} frame{}, {} fragments in {:.2f} s ({}fragments/s, replay included){}\n", r.frames.size(),
              r.frames.size() == 1 ? "" : "s", fragments, r.seconds,
-             humanCount(r.seconds > 0 ? fragments / r.seconds : 0.0) + " ");
+             humanCount(r.seconds > 0 ? fragments / r.seconds : 0.0) + " ",
+             r.replays > 1 ? fmt::format("; replayed twice: a draw outgrew the first record buffer ({} records), "
+                                         "the second held {}",
+                                         r.first_record_capacity, r.record_capacity)
+                           : "");
 }
 
 // "r,g,b", each a number in [0, 1].

@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <map>
+#include <string>
+#include <vector>
+
 #include "CliRunner.hpp"
 
 namespace oit::test {
@@ -75,6 +79,42 @@ TEST_F(CliRunUnmodelled, AModelledVersionTwoTraceHasNone) {
   EXPECT_EQ(j.at("fragments").at("not_modelled").at("draws"), 0);
   EXPECT_EQ(j.at("fragments").at("not_modelled").at("fragments"), 0);
   EXPECT_TRUE(j.at("fragments").at("not_modelled").at("by_blend_mode").empty());
+}
+
+// A sweep's table (reports/SWEEP.md) has the not-modelled counts as columns, like
+// every report field: a trace with unmodelled draws and one without, each row its
+// own counts (3 draws and 16 fragments, 11 of them additive; 0 and 0).
+TEST_F(CliRunUnmodelled, SweepTableHasTheNotModelledColumns) {
+  writeText(dir_.file("v2.csv"), std::string("# oitsim-trace v2\n") + kHead + kOverState + kUnmodelled + kRows);
+  writeText(dir_.file("over.csv"), std::string("# oitsim-trace v2\n") + kHead + kOverState + kRows);
+  writeText(dir_.file("spec.json"), R"({
+  "traces": [{"path": "v2.csv", "name": "unmodelled"}, {"path": "over.csv", "name": "over"}],
+  "base": {"mode": "functional", "format": "fp32"},
+  "axes": {"algo": ["alpha"]}
+})");
+  const std::string out = dir_.file("sweep");
+  CliResult r = runOitsim("sweep " + dir_.file("spec.json") + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto csv = lines(readText(out + "/results.csv"));
+  ASSERT_EQ(csv.size(), 3u);  // header + 2 points
+  const auto header = csvSplit(csv[0]);
+  std::map<std::string, size_t> col;
+  for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* k : {"fragments.not_modelled.draws", "fragments.not_modelled.fragments",
+                        "fragments.not_modelled.by_blend_mode.additive.fragments"})
+    ASSERT_TRUE(col.count(k)) << "results.csv lacks column " << k;
+  std::map<std::string, std::vector<std::string>> row;
+  for (size_t i = 1; i < csv.size(); ++i) {
+    const auto cells = csvSplit(csv[i]);
+    row[cells[col["trace"]]] = cells;
+  }
+  ASSERT_TRUE(row.count("unmodelled") && row.count("over")) << csv[1] << "\n" << csv[2];
+  EXPECT_EQ(row["unmodelled"][col["fragments.not_modelled.draws"]], "3");
+  EXPECT_EQ(row["unmodelled"][col["fragments.not_modelled.fragments"]], "16");
+  EXPECT_EQ(row["unmodelled"][col["fragments.not_modelled.by_blend_mode.additive.fragments"]], "11");
+  EXPECT_EQ(row["over"][col["fragments.not_modelled.draws"]], "0");
+  EXPECT_EQ(row["over"][col["fragments.not_modelled.fragments"]], "0");
+  EXPECT_EQ(row["over"][col["fragments.not_modelled.by_blend_mode.additive.fragments"]], "");  // no such draw
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -123,6 +124,12 @@ class ApitraceCapture : public ::testing::Test {
     o.first_frame = o.last_frame = frame;
     o.interposer = std::string(OITSIM_BINARY_DIR) + "/apps/liboitsim_interposer.so";
     return o;
+  }
+  // Frame 1 of the trace captured with --verify (GL's check drawing, its records).
+  ApitraceResult verifiedCapture(const std::string& trace) const {
+    ApitraceOptions o = options(trace, 1);
+    o.verify = true;
+    return captureApitrace(o);
   }
   // The mesh capture's fragments as draw `draw`, kept where keep(fragment) holds.
   template <typename Keep>
@@ -258,9 +265,7 @@ TEST_F(ApitraceCapture, EveryDrawKindMatchesTheMeshCapture) {
 // application draws into its window (no FBO).
 TEST_F(ApitraceCapture, VerifyAndCommandLine) {
   const std::string trace = traceApp({"glsl120 over off", "glsl330 over test", "discard over off"}, 3, false);
-  ApitraceOptions o = options(trace, 1);
-  o.verify = true;
-  const ApitraceResult r = captureApitrace(o);
+  const ApitraceResult r = verifiedCapture(trace);
   ASSERT_EQ(r.frames.size(), 1u);
   ASSERT_TRUE(r.frames[0].reference);
   EXPECT_EQ(sameUpToDepthUlp(ofDraw(r.frames[0], 0), expected(0)), "");
@@ -269,6 +274,12 @@ TEST_F(ApitraceCapture, VerifyAndCommandLine) {
   EXPECT_EQ(v.channels_compared, 3u * kWidth * kHeight);
   EXPECT_EQ(v.channels_differing, 0u) << v.first_difference;
   EXPECT_EQ(v.count_pixels_differing, 0u) << v.first_difference;
+  // Drawn into the window: the same fragments as the check drawing (an FBO), depth
+  // within the window's rounding (CAPTURE.md), colours equal (no textures).
+  EXPECT_EQ(r.frames[0].window_draws, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_EQ(v.drawing_mismatches, 0u) << v.first_drawing_difference;
+  EXPECT_EQ(v.colour_differing, 0u) << v.first_drawing_difference;
+  EXPECT_LE(v.max_depth_diff, 2 * 6e-8);  // 2 ulp below 1.0 (measured)
   EXPECT_TRUE(v.passes());
 
   const std::string oitsim = std::string(OITSIM_BINARY_DIR) + "/apps/oitsim";
@@ -285,6 +296,117 @@ TEST_F(ApitraceCapture, VerifyAndCommandLine) {
     for (auto chunk = src->next(); !chunk.empty(); chunk = src->next()) all.insert(all.end(), chunk.begin(), chunk.end());
     EXPECT_TRUE(same(all, r.frames[0].fragments)) << name;
   }
+}
+
+// --verify compares like with like: GL's blend with the records of the drawing GL
+// blended (the check drawing), the trace's per-pixel counts with GL's, and the
+// trace with the check drawing one to one. A real mismatch in the trace fails it:
+// a colour, an order, a dropped fragment, a depth; and so does a blend the records
+// do not reproduce. The application draws into a framebuffer object here, so the
+// two drawings agree bit for bit (depth included).
+TEST_F(ApitraceCapture, VerifyCatchesARealMismatch) {
+  const ApitraceResult r =
+      verifiedCapture(traceApp({"glsl120 over off", "glsl330 over test", "discard over off"}, 3, true));
+  ASSERT_EQ(r.frames.size(), 1u);
+  const FrameCapture& good = r.frames[0];
+  ASSERT_TRUE(good.reference);
+  const TransparentVerifyResult v = verifyTransparentDraws(good);
+  EXPECT_TRUE(v.passes());
+  EXPECT_EQ(v.check_fragments, good.fragments.size());
+  EXPECT_EQ(v.channels_differing, 0u) << v.first_difference;
+  EXPECT_EQ(v.drawing_mismatches, 0u) << v.first_drawing_difference;
+  EXPECT_EQ(v.colour_differing, 0u) << v.first_drawing_difference;
+  EXPECT_EQ(v.depth_differing, 0u);
+  EXPECT_TRUE(good.window_draws.empty());
+
+  // Two fragments of one pixel from different primitives of draw 0 (the cube's
+  // front and back faces), and a fragment alone at its pixel.
+  size_t i = 0, j = 0, alone = 0;
+  std::map<std::pair<uint16_t, uint16_t>, std::vector<size_t>> at;
+  for (size_t k = 0; k < good.fragments.size(); ++k)
+    if (good.fragments[k].draw == 0) at[{good.fragments[k].x, good.fragments[k].y}].push_back(k);
+  for (const auto& [pixel, ks] : at) {
+    if (ks.size() == 2 && good.fragments[ks[0]].prim != good.fragments[ks[1]].prim && i == j) i = ks[0], j = ks[1];
+  }
+  for (size_t k = 0; k < good.fragments.size(); ++k) {
+    const Fragment& f = good.fragments[k];
+    size_t n = 0;
+    for (const Fragment& g : good.fragments) n += g.x == f.x && g.y == f.y;
+    if (n == 1) {
+      alone = k;
+      break;
+    }
+  }
+  ASSERT_NE(i, j);
+  auto fails = [&](const char* what, auto change) {
+    FrameCapture bad = good;
+    change(bad);
+    const TransparentVerifyResult b = verifyTransparentDraws(bad);
+    EXPECT_FALSE(b.passes()) << what;
+    return b;
+  };
+  // A colour 0.1 off: beyond the drawings' bound (4/255).
+  const auto colour = fails("colour", [&](FrameCapture& f) { f.fragments[i].r += 0.1f; });
+  EXPECT_EQ(colour.colour_differing, 1u);
+  EXPECT_NEAR(colour.max_colour_diff, 0.1, 1e-6);
+  // The two fragments of one pixel in the wrong order.
+  const auto order = fails("order", [&](FrameCapture& f) { std::swap(f.fragments[i], f.fragments[j]); });
+  EXPECT_EQ(order.drawing_mismatches, 2u);
+  // A fragment dropped: its pixel's count and every later fragment's place.
+  const auto dropped = fails("dropped", [&](FrameCapture& f) {
+    f.fragments.erase(f.fragments.begin() + static_cast<std::ptrdiff_t>(alone));
+  });
+  EXPECT_EQ(dropped.count_pixels_differing, 1u);
+  // A depth one ulp off (drawn into an FBO: depths must be equal).
+  const auto depth = fails("depth", [&](FrameCapture& f) { f.fragments[i].z = std::nextafter(f.fragments[i].z, 2.0f); });
+  EXPECT_EQ(depth.drawing_mismatches, 1u);
+  // GL's blend not what the check drawing's records give.
+  const auto blend = fails("blend", [&](FrameCapture& f) { f.reference->rgba[4 * (f.fragments[i].y * kWidth + f.fragments[i].x)] += 1e-3f; });
+  EXPECT_EQ(blend.channels_differing, 1u);
+  EXPECT_EQ(blend.drawing_mismatches, 0u);
+}
+
+// The record buffer starts sized to the frame (ApitraceOptions::records_per_pixel);
+// a draw that outgrows it has blended already, so the capture replays the trace
+// with room for the largest such draw. Here 0.1 records per pixel: 307 records for
+// the 64 x 48 frame, against more than 500 per cube draw; the second replay's
+// buffer holds the largest draw's count, and the frame equals a capture whose
+// buffer was GL's largest block from the start.
+TEST_F(ApitraceCapture, ADrawThatOutgrowsTheFirstRecordBufferIsCapturedByASecondReplay) {
+  const std::string trace = traceApp({"glsl120 over off", "glsl330 over test", "discard over off"});
+  ApitraceOptions o = options(trace, 1);
+  o.records_per_pixel = 0;
+  const ApitraceResult full = captureApitrace(o);
+  ASSERT_EQ(full.frames.size(), 1u);
+  EXPECT_EQ(full.replays, 1u);
+  EXPECT_EQ(full.record_capacity, full.record_limit);
+  EXPECT_TRUE(full.frames[0].uncaptured.empty());
+  o.records_per_pixel = 0.1;
+  const ApitraceResult r = captureApitrace(o);
+  ASSERT_EQ(r.frames.size(), 1u);
+  EXPECT_EQ(r.replays, 2u);
+  EXPECT_EQ(r.first_record_capacity, 307u);  // floor(0.1 * 64 * 48)
+  EXPECT_EQ(r.record_capacity, mesh_.fragments.size());  // draws 0 and 1 record every cube fragment
+  EXPECT_TRUE(r.frames[0].uncaptured.empty());
+  EXPECT_TRUE(same(r.frames[0].fragments, full.frames[0].fragments))
+      << firstDifference(r.frames[0].fragments, full.frames[0].fragments);
+  // The same with --verify: the check drawings' records (also in the stream) do not
+  // hide the overflow, and the second replay's frame passes the check.
+  o.verify = true;
+  const ApitraceResult checked = captureApitrace(o);
+  ASSERT_EQ(checked.frames.size(), 1u);
+  EXPECT_EQ(checked.replays, 2u);
+  EXPECT_TRUE(same(checked.frames[0].fragments, full.frames[0].fragments));
+  EXPECT_TRUE(verifyTransparentDraws(checked.frames[0]).passes());
+  o.verify = false;
+  // --max-records-per-draw caps the second buffer: a draw above the cap stays listed.
+  o.max_records_per_draw = 400;
+  const ApitraceResult capped = captureApitrace(o);
+  EXPECT_EQ(capped.replays, 2u);
+  EXPECT_EQ(capped.record_capacity, 400u);
+  ASSERT_EQ(capped.frames[0].uncaptured.size(), 3u);
+  EXPECT_EQ(capped.frames[0].uncaptured[0].reason, static_cast<uint32_t>(stream::kOverflow));
+  EXPECT_EQ(capped.frames[0].uncaptured[0].fragments, mesh_.fragments.size());
 }
 
 // Bad input: one line naming the file, the frame or the program; exit 1; nothing written.

@@ -1,4 +1,5 @@
 #include "traces/capture/ApitraceCapture.hpp"
+#include "traces/capture/ApitraceStream.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -9,7 +10,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -18,7 +18,6 @@
 
 #include <fmt/format.h>
 
-#include "traces/capture/interposer/BlendClass.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 
 extern char** environ;
@@ -62,34 +61,6 @@ std::string findOnPath(const std::string& name) {
   return "";
 }
 
-std::string tail(const std::string& text, size_t lines) {
-  size_t pos = text.size();
-  while (pos > 0 && (text[pos - 1] == '\n')) --pos;
-  for (size_t n = 0; n < lines && pos > 0; ++n) {
-    pos = text.rfind('\n', pos - 1);
-    if (pos == std::string::npos) {
-      pos = 0;
-      break;
-    }
-  }
-  std::string t = text.substr(pos);
-  while (!t.empty() && t.front() == '\n') t.erase(0, 1);
-  while (!t.empty() && t.back() == '\n') t.pop_back();
-  for (char& c : t)
-    if (c == '\n') c = ' ';
-  return t;
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary | std::ios::ate);
-  if (!f) return {};
-  std::string s(static_cast<size_t>(f.tellg()), '\0');
-  f.seekg(0);
-  f.read(s.data(), static_cast<std::streamsize>(s.size()));
-  s.resize(static_cast<size_t>(f.gcount()));
-  return s;
-}
-
 // A private X server for glretrace (which presents through GLX even with
 // --headless): Xvfb on a free display it picks itself (-displayfd), stopped with the
 // capture. Without Xvfb the capture uses $DISPLAY.
@@ -99,7 +70,7 @@ class PrivateXServer {
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0)
       throw std::runtime_error(fmt::format("cannot create a pipe for Xvfb: {}", std::strerror(errno)));
-    std::vector<std::string> args = {xvfb, "-displayfd", "3", "-nolisten", "tcp", "-screen", "0", "1920x1080x24"};
+    std::vector<std::string> args = {xvfb, "-displayfd", "3", "-nolisten", "tcp", "-noreset", "-screen", "0", "1920x1080x24"};
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -127,6 +98,11 @@ class PrivateXServer {
     display_ = ":" + number;
   }
   ~PrivateXServer() { stop(); }
+  // Asks the server to exit without waiting for it (the destructor reaps it).
+  void terminate() {
+    if (pid_ > 0 && !terminated_) ::kill(pid_, SIGTERM);
+    terminated_ = true;
+  }
   PrivateXServer(const PrivateXServer&) = delete;
   PrivateXServer& operator=(const PrivateXServer&) = delete;
   const std::string& display() const { return display_; }
@@ -134,20 +110,24 @@ class PrivateXServer {
  private:
   void stop() {
     if (pid_ <= 0) return;
-    ::kill(pid_, SIGTERM);
+    if (!terminated_) ::kill(pid_, SIGTERM);
     int status = 0;
     while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
     }
     pid_ = 0;
   }
   pid_t pid_ = 0;
+  bool terminated_ = false;
   std::string display_;
 };
 
 // Runs the retracer with the interposer as its libGL.so.1; returns its exit status
 // (the raw waitpid status).
-int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std::string& gl_dir,
-                const std::string& display, const std::string& stream_path, const std::string& log_path) {
+// The record buffer holds `records_per_pixel` records per pixel of the frame (0:
+// `max_records`, or GL's largest storage block when that is 0).
+int runRetracer(const ApitraceOptions& o, uint64_t max_records, double records_per_pixel,
+                const std::string& retracer, const std::string& gl_dir, const std::string& display,
+                const std::string& stream_path, const std::string& log_path) {
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e) {
     const std::string_view v(*e);
@@ -170,7 +150,8 @@ int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std
   env.push_back("OITSIM_STREAM=" + stream_path);
   env.push_back(fmt::format("OITSIM_FRAMES={}-{}", o.first_frame, o.last_frame));
   env.push_back(std::string("OITSIM_VERIFY=") + (o.verify ? "1" : "0"));
-  env.push_back(fmt::format("OITSIM_MAX_RECORDS={}", o.max_records_per_draw));
+  env.push_back(fmt::format("OITSIM_MAX_RECORDS={}", max_records));
+  env.push_back(fmt::format("OITSIM_RECORDS_PER_PIXEL={}", records_per_pixel));
   std::vector<char*> envp;
   for (std::string& s : env) envp.push_back(s.data());
   envp.push_back(nullptr);
@@ -193,122 +174,6 @@ int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std
     if (errno != EINTR) throw std::runtime_error(fmt::format("waiting for {}: {}", retracer, std::strerror(errno)));
   return status;
 }
-
-// Straight RGBA of a record, clamped to what a trace holds; counts what it changed.
-void toFragment(const st::GpuRecord& r, const st::DrawChunk& d, FrameCapture& f, Fragment& out) {
-  float c[4] = {r.rgba[0], r.rgba[1], r.rgba[2], r.rgba[3]};
-  bool clamped = false;
-  for (float& v : c) {
-    if (!std::isfinite(v)) {
-      v = std::isinf(v) && v > 0 ? 1.0f : 0.0f;
-      clamped = true;
-    } else if (v < 0.0f || v > 1.0f) {
-      v = std::clamp(v, 0.0f, 1.0f);
-      clamped = true;
-    }
-  }
-  if (d.state.blend_mode == st::kBlendPremulOver) {
-    // ONE, ONE_MINUS_SRC_ALPHA blends a premultiplied colour: the trace holds straight colour.
-    if (c[3] > 0.0f) {
-      for (int k = 0; k < 3; ++k) {
-        const float s = c[k] / c[3];
-        if (s > 1.0f) ++f.premultiplied_clamped;
-        c[k] = std::min(s, 1.0f);
-      }
-    } else if (c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f) {
-      c[0] = c[1] = c[2] = 0.0f;
-      ++f.premultiplied_zero_alpha;
-    }
-  }
-  if (clamped) ++f.colour_clamped;
-  float z = r.z;
-  if (!(z >= 0.0f && z <= 1.0f)) {
-    z = std::isfinite(z) ? std::clamp(z, 0.0f, 1.0f) : 1.0f;
-    ++f.depth_clamped;
-  }
-  out = Fragment{static_cast<uint16_t>(r.xy & 0xFFFF), static_cast<uint16_t>(r.xy >> 16), z, c[0], c[1], c[2],
-                 c[3], r.prim, d.index};
-}
-
-DrawState toDrawState(const st::DrawChunk& d, uint64_t fragments) {
-  DrawState s;
-  s.blend = static_cast<BlendMode>(d.state.blend_mode);
-  s.depth_test = d.state.depth_test != 0;
-  s.depth_write = d.state.depth_write != 0;
-  s.depth_func = d.state.depth_func;
-  s.blend_eq_rgb = d.state.blend_eq_rgb;
-  s.blend_src_rgb = d.state.blend_src_rgb;
-  s.blend_dst_rgb = d.state.blend_dst_rgb;
-  s.blend_eq_alpha = d.state.blend_eq_alpha;
-  s.blend_src_alpha = d.state.blend_src_alpha;
-  s.blend_dst_alpha = d.state.blend_dst_alpha;
-  s.fragments = fragments;
-  return s;
-}
-
-// Appends one captured draw's records to the frame in API order.
-void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f) {
-  const auto mode = static_cast<BlendMode>(d.state.blend_mode);
-  DrawInfo info;
-  info.id = d.index;
-  info.cls = mode == BlendMode::Off ? DrawClass::Opaque : DrawClass::Transparent;
-  std::string fn(d.function, ::strnlen(d.function, sizeof d.function));
-  info.name = fmt::format("{} #{} program {}", fn, d.index, d.program).substr(0, 55);
-  info.state = toDrawState(d, d.records);
-  f.header.draws.push_back(info);
-  ++f.draws_by_mode[d.state.blend_mode];
-  f.fragments_by_mode[d.state.blend_mode] += d.records;
-  if (!d.state.early_tests) ++f.late_depth_draws;
-  if (d.instanced) ++f.multi_draws;
-  if (!info.state->recorded()) return;  // listed, not modelled: its fragments stay out
-  const size_t first = f.fragments.size();
-  f.fragments.reserve(first + d.records);  // not resize: its zero fill was 6 % of the capture's CPU time
-  for (uint64_t i = 0; i < d.records; ++i) {
-    Fragment frag;
-    toFragment(recs[i], d, f, frag);
-    f.fragments.push_back(frag);
-  }
-  // Threads append in any order. API order within a draw: primitive, then pixel
-  // rows bottom-up, then x (as oitsim gen and the mesh capture emit). Instances and
-  // sub-draws restart primitive ids: their fragments at one pixel are then ordered by
-  // depth and colour, deterministic but not necessarily the instances' order.
-  std::sort(f.fragments.begin() + static_cast<std::ptrdiff_t>(first), f.fragments.end(),
-            [](const Fragment& a, const Fragment& b) {
-              if (a.prim != b.prim) return a.prim < b.prim;
-              if (a.y != b.y) return a.y < b.y;
-              if (a.x != b.x) return a.x < b.x;
-              if (a.z != b.z) return a.z < b.z;
-              if (a.r != b.r) return a.r < b.r;
-              if (a.g != b.g) return a.g < b.g;
-              if (a.b != b.b) return a.b < b.b;
-              return a.a < b.a;
-            });
-}
-
-class StreamReader {
- public:
-  StreamReader(const std::string& data, const std::string& trace) : d_(data), trace_(trace) {}
-  bool done() const { return pos_ >= d_.size(); }
-  template <typename T>
-  const T* take(uint64_t n = 1) {
-    const uint64_t bytes = sizeof(T) * n;
-    if (d_.size() - pos_ < bytes)
-      throw std::runtime_error(fmt::format("{}: the interposer's stream ends inside a chunk (the retracer stopped "
-                                           "while writing it)", trace_));
-    const T* p = reinterpret_cast<const T*>(d_.data() + pos_);
-    pos_ += bytes;
-    return p;
-  }
-  std::string text(uint32_t n) {
-    const char* p = take<char>(n);
-    return std::string(p, n);
-  }
-
- private:
-  const std::string& d_;
-  const std::string& trace_;
-  uint64_t pos_ = 0;
-};
 
 }  // namespace
 
@@ -365,105 +230,29 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
   const std::string gl_dir = tmp.path + "/gl";
   fs::create_directory(gl_dir);
   fs::create_symlink(fs::absolute(interposer), gl_dir + "/libGL.so.1");
-  int status = 0;
-  if (!xvfb.empty()) {
-    const PrivateXServer x(xvfb);
-    status = runRetracer(o, retracer, gl_dir, x.display(), stream_path, log_path);
-  } else {
-    status = runRetracer(o, retracer, gl_dir, user_display, stream_path, log_path);
-  }
-  ApitraceResult result;
-  result.renderer_log = readFile(log_path);
-  const std::string data = readFile(stream_path);
-  const std::string log_tail = tail(result.renderer_log, 3);
-  auto retracerFailed = [&](const std::string& what) {
-    return std::runtime_error(fmt::format("{}: {} {}{}", o.trace, retracer, what,
-                                          log_tail.empty() ? "" : "; its last output: " + log_tail));
+  std::optional<PrivateXServer> x;
+  if (!xvfb.empty()) x.emplace(xvfb);
+  const std::string display = x ? x->display() : std::string(user_display);
+  auto replay = [&](uint64_t max_records, double records_per_pixel) {
+    return runRetracer(o, max_records, records_per_pixel, retracer, gl_dir, display, stream_path, log_path);
   };
-  if (data.size() < sizeof(st::StreamHeader) || std::memcmp(data.data(), st::kMagic, sizeof st::kMagic) != 0) {
-    if (WIFEXITED(status))
-      throw retracerFailed(fmt::format("exited with status {} before the interposer started (is {} the "
-                                       "interposer, and the trace an OpenGL trace?)", WEXITSTATUS(status),
-                                       interposer));
-    throw retracerFailed(fmt::format("was killed by signal {}", WTERMSIG(status)));
-  }
-
-  StreamReader in(data, o.trace);
-  in.take<st::StreamHeader>();
-  FrameCapture cur;
-  bool have_frame = false;
-  std::optional<st::EndChunk> end;
-  auto startFrame = [&](uint32_t frame) {
-    if (have_frame && cur.frame == frame) return;
-    cur = FrameCapture{};
-    cur.frame = frame;
-    cur.header.version = 2;
-    cur.header.encoding = ColourEncoding::Fp32;
-    have_frame = true;
-  };
-  while (!in.done() && !end) {
-    const st::ChunkHeader c = *in.take<st::ChunkHeader>();
-    switch (c.tag) {
-      case st::kDraw: {
-        const st::DrawChunk d = *in.take<st::DrawChunk>();
-        const st::GpuRecord* recs = in.take<st::GpuRecord>(d.records);
-        startFrame(d.frame);
-        ++cur.draw_calls;
-        if (d.reason == st::kCaptured) {
-          addDraw(d, recs, cur);
-        } else {
-          cur.uncaptured.push_back({d.index, d.reason, std::string(d.function, ::strnlen(d.function, sizeof d.function)),
-                                    d.program, d.width, d.height, d.fragments});
-        }
-        break;
-      }
-      case st::kVerify: {
-        const st::FrameChunk f = *in.take<st::FrameChunk>();
-        startFrame(f.frame);
-        GlTransparentReference ref;
-        ref.width = f.width;
-        ref.height = f.height;
-        const size_t px = size_t(f.width) * f.height;
-        const float* rgba = in.take<float>(px * 4);
-        const uint32_t* count = in.take<uint32_t>(px);
-        ref.rgba.assign(rgba, rgba + px * 4);
-        ref.count.assign(count, count + px);
-        cur.reference = std::move(ref);
-        break;
-      }
-      case st::kFrame: {
-        const st::FrameChunk f = *in.take<st::FrameChunk>();
-        startFrame(f.frame);
-        if (f.width == 0 || f.height == 0 || f.width > 65535 || f.height > 65535)
-          throw std::runtime_error(fmt::format("{}: frame {}: the application's drawable size {}x{} is unknown or "
-                                               "beyond a trace's 65535", o.trace, f.frame, f.width, f.height));
-        cur.header.width = f.width;
-        cur.header.height = f.height;
-        cur.header.fragment_count = cur.fragments.size();
-        result.frames.push_back(std::move(cur));
-        have_frame = false;
-        break;
-      }
-      case st::kError:
-        throw std::runtime_error(fmt::format("{}: {}", o.trace, in.text(c.bytes)));
-      case st::kEnd:
-        end = *in.take<st::EndChunk>();
-        break;
-      default:
-        throw std::runtime_error(fmt::format("{}: unknown chunk {} in the interposer's stream", o.trace, c.tag));
-    }
-  }
-  if (!end) {
-    if (WIFSIGNALED(status)) throw retracerFailed(fmt::format("was killed by signal {}", WTERMSIG(status)));
-    throw retracerFailed(fmt::format("stopped without finishing the stream (exit status {})",
-                                     WIFEXITED(status) ? WEXITSTATUS(status) : -1));
-  }
-  if (!end->range_done) {
-    const uint32_t frames = end->frames_seen;
-    throw std::runtime_error(fmt::format(
-        "{}: frame range {}-{} is past the end: the trace has {} frame{} (swap-buffer counts 0-{}){}", o.trace,
-        o.first_frame, o.last_frame, frames, frames == 1 ? "" : "s", frames ? frames - 1 : 0,
-        frames == 0 ? "; no frame was presented (an EGL trace? the capture replays GLX traces; or the retracer failed: " + log_tail + ")" : ""));
+  int status = replay(o.max_records_per_draw, o.records_per_pixel);
+  // A draw that outgrew the buffer sized to the frame (it has blended already and
+  // cannot be drawn again): replay the trace once more with room for the largest
+  // such draw, so the frames hold every draw that fits GL's largest block or
+  // --max-records-per-draw (the overflowing draws' counts are exact: the shader
+  // counts past the capacity).
+  const StreamScan first = scanStream(stream_path);
+  const uint64_t ceiling =
+      o.max_records_per_draw ? std::min(o.max_records_per_draw, first.record_limit) : first.record_limit;
+  const bool again = first.overflow_need > first.record_capacity && first.record_capacity < ceiling;
+  if (again) status = replay(std::min(first.overflow_need, ceiling), 0);
+  // The X server stops while the stream is read (reaped when `x` goes).
+  if (x) x->terminate();
+  ApitraceResult result = readStream(o, retracer, interposer, status, stream_path, log_path);
+  if (again) {
+    result.replays = 2;
+    result.first_record_capacity = first.record_capacity;
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -22,6 +22,10 @@ struct ApitraceOptions {
   uint32_t first_frame = 0, last_frame = 0;  // swap-buffer counts, inclusive
   bool verify = false;              // GL's own blend and count of the transparent draws
   uint64_t max_records_per_draw = 0;  // 0 = the largest shader storage block
+  // The record buffer first holds this many records per pixel of the frame (at most
+  // the above); a draw that outgrows it makes the capture replay the trace once more
+  // with room for it. 0 = the maximum from the start.
+  double records_per_pixel = 2;
   std::string retracer;             // "" = glretrace on PATH
   std::string interposer;           // "" = liboitsim_interposer.so next to this executable
 };
@@ -38,11 +42,13 @@ struct UncapturedDraw {
 
 // GL's images of a frame's transparent draws (--verify): RGBA32F cleared to 0, the
 // draws blended with the application's own blend state and depth buffer, and the
-// fragments per pixel counted by that second drawing. Row 0 is the bottom row.
+// fragments per pixel counted by that second drawing (the check drawing), with
+// the records it made. Row 0 is the bottom row.
 struct GlTransparentReference {
   uint32_t width = 0, height = 0;
   std::vector<float> rgba;
   std::vector<uint32_t> count;
+  std::vector<Fragment> fragments;  // the check drawing's records, API order, as a trace holds them
 };
 
 struct FrameCapture {
@@ -54,6 +60,7 @@ struct FrameCapture {
   std::array<uint64_t, 6> draws_by_mode{}, fragments_by_mode{};  // captured, by BlendMode
   uint64_t late_depth_draws = 0;    // programs that discard or write depth: recorded before the depth test
   uint64_t multi_draws = 0;         // instanced or multi-draw calls: primitive ids restart per instance
+  std::vector<uint32_t> window_draws;  // captured draws drawn into the window, not a framebuffer object
   uint64_t colour_clamped = 0;      // colour outside [0,1] or not finite, clamped (NaN -> 0)
   uint64_t depth_clamped = 0;       // depth written outside [0,1] or not finite, clamped
   uint64_t premultiplied_zero_alpha = 0;  // premultiplied colour over alpha 0: straight colour unknown, 0
@@ -64,7 +71,11 @@ struct FrameCapture {
 struct ApitraceResult {
   std::vector<FrameCapture> frames;
   std::string renderer_log;  // the retracer's output (stdout and stderr)
-  double seconds = 0;        // retracer run + reading + sorting
+  double seconds = 0;        // retracer run(s) + reading + sorting
+  uint32_t replays = 1;      // 2 when a draw outgrew the first record buffer
+  uint64_t first_record_capacity = 0;  // the first run's record buffer (records), with replays = 2
+  uint64_t record_capacity = 0;        // the record buffer of the run kept (records; 0: nothing recorded)
+  uint64_t record_limit = 0;           // records GL's largest storage block holds (0: not asked)
 };
 
 // Throws std::invalid_argument naming the file when it is not an apitrace trace

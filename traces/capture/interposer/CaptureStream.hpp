@@ -1,16 +1,21 @@
 // The stream the interposed GL library (liboitsim_interposer.so, loaded by
 // apitrace's retracer as its libGL.so.1) writes for `oitsim capture --apitrace`:
-// one file, native little-endian structs, read back by traces/capture/ApitraceCapture.cpp.
+// one file, native little-endian structs, read back by traces/capture/ApitraceStream.cpp.
 // Both sides include this header, so the layout cannot drift.
 //
 //   StreamHeader, then chunks: ChunkHeader + payload.
 //   kDraw:  DrawChunk, then DrawChunk::records GpuRecords (only when captured)
 //   kFrame: FrameChunk at each swap of a frame in the range
 //   kError: text (a program that fails to link after rewriting, a GL failure)
-//   kEnd:   EndChunk when the retracer exits or the range is done
+//   kEnd:   EndChunk when the retracer exits or the range is done (with the record
+//           buffer's capacity: a draw that overflowed a buffer sized by
+//           OITSIM_RECORDS_PER_PIXEL is captured again with a larger one)
 //   kVerify: FrameChunk, then width x height RGBA float (GL's blend of the frame's
 //           transparent draws into an RGBA32F target cleared to 0) and width x height
 //           u32 (fragments per pixel counted by the same second drawing), before kFrame
+//   kCheckDraw: DrawChunk + records, as kDraw, of that second drawing (the check
+//           drawing) of one draw, before the draw's own kDraw: the records GL
+//           blended into the kVerify image
 #pragma once
 
 #include <cstdint>
@@ -24,7 +29,7 @@ struct StreamHeader {
   uint32_t first_frame, last_frame;  // the range asked for (swap-buffer counts)
 };
 
-enum ChunkTag : uint32_t { kDraw = 1, kFrame = 2, kError = 3, kEnd = 4, kVerify = 5 };
+enum ChunkTag : uint32_t { kDraw = 1, kFrame = 2, kError = 3, kEnd = 4, kVerify = 5, kCheckDraw = 6 };
 
 struct ChunkHeader {
   uint32_t tag;
@@ -99,7 +104,8 @@ struct DrawChunk {
   uint32_t program;     // current program object (0 = none)
   uint32_t width, height;  // size of the render target (0 when unknown)
   uint32_t instanced;   // the call draws instances or several sub-draws (primitive ids restart)
-  uint32_t pad;
+  uint32_t window;      // 1: drawn into the window (framebuffer 0), whose depth llvmpipe interpolates
+                        // from the other edge (CAPTURE.md: within 2 ulp of an FBO's)
   uint64_t fragments;   // fragments the shader counted (also when not recorded, e.g. overflow)
   uint64_t records;     // GpuRecords that follow (0 unless captured)
   DrawState state;
@@ -115,6 +121,8 @@ struct FrameChunk {
 struct EndChunk {
   uint32_t frames_seen;   // swaps replayed before the retracer stopped
   uint32_t range_done;    // 1 when the last frame of the range was completed
+  uint64_t record_capacity;  // records the record buffer held (0: no draw was recorded)
+  uint64_t record_limit;     // records the largest shader storage block holds (0: not asked)
 };
 
 // One record as the injected fragment code stores it (std430): 32 bytes.

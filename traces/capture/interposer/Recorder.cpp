@@ -40,6 +40,7 @@ Recorder::Recorder() {
   last_ = b;
   verify_ = std::getenv("OITSIM_VERIFY") && std::strcmp(std::getenv("OITSIM_VERIFY"), "1") == 0;
   if (const char* m = std::getenv("OITSIM_MAX_RECORDS")) max_records_ = std::strtoull(m, nullptr, 10);
+  if (const char* k = std::getenv("OITSIM_RECORDS_PER_PIXEL")) records_per_pixel_ = std::strtod(k, nullptr);
   StreamHeader h{};
   std::memcpy(h.magic, kMagic, sizeof h.magic);
   h.first_frame = first_;
@@ -58,7 +59,7 @@ void Recorder::write(uint32_t tag, const void* payload, uint32_t bytes, const vo
 void Recorder::finishStream(bool range_done) {
   if (!active_ || ended_) return;
   ended_ = true;
-  const EndChunk e{frame_, range_done ? 1u : 0u};
+  const EndChunk e{frame_, range_done ? 1u : 0u, capacity_, limit_};
   write(kEnd, &e, sizeof e);
   std::fclose(out_);
   out_ = nullptr;
@@ -213,6 +214,7 @@ uint32_t Recorder::classify(Pending& p, GLint program) {
 
   GLint fb = 0;
   g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &fb);
+  p.chunk.window = fb == 0 ? 1 : 0;
   GLint max_buffers = 1;
   g.glGetIntegerv(GL_MAX_DRAW_BUFFERS, &max_buffers);
   int active = 0;
@@ -339,8 +341,16 @@ void Recorder::arm(Pending& p) {
   if (!record_buffer_) {
     GLint64 max_block = 0;
     g.glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-    const uint64_t limit = (static_cast<uint64_t>(max_block) - kRecordHeaderBytes) / sizeof(GpuRecord);
-    capacity_ = max_records_ ? std::min(max_records_, limit) : limit;
+    limit_ = (static_cast<uint64_t>(max_block) - kRecordHeaderBytes) / sizeof(GpuRecord);
+    capacity_ = max_records_ ? std::min(max_records_, limit_) : limit_;
+    // llvmpipe zero-fills the whole buffer when it is created: at GL's largest
+    // block (128 MiB on Mesa 22) the kernel's zeroing of its pages was the
+    // retracer's largest cost. Sized to the frame instead; a draw that outgrows it
+    // is reported as overflowing, with its count, and oitsim captures again with
+    // room for it (ApitraceCapture.cpp).
+    if (records_per_pixel_ > 0)
+      capacity_ = std::min(capacity_, std::max<uint64_t>(1, static_cast<uint64_t>(records_per_pixel_ * frame_w_ *
+                                                                                   double(frame_h_))));
     GLint saved = 0;
     g.glGetIntegerv(GL_COPY_WRITE_BUFFER_BINDING, &saved);
     g.glGenBuffers(1, &record_buffer_);
@@ -360,12 +370,7 @@ void Recorder::arm(Pending& p) {
   g.glProgramUniform1ui(prog, p.info->loc_mode, 1);
 }
 
-void Recorder::finish(Pending& p) {
-  DrawChunk& c = p.chunk;
-  if (c.reason != kCaptured) {
-    write(kDraw, &c, sizeof c);
-    return;
-  }
+void Recorder::takeRecords(const Pending& p, DrawChunk c, uint32_t tag) {
   RealGl& g = gl();
   g.glProgramUniform1ui(c.program, p.info->loc_mode, 0);
   restoreStorage(record_binding_, p.records);  // bound only for the draw
@@ -375,16 +380,24 @@ void Recorder::finish(Pending& p) {
   c.fragments = count;
   if (count > capacity_) {
     c.reason = kOverflow;
-    write(kDraw, &c, sizeof c);
+    write(tag, &c, sizeof c);
     return;
   }
   c.records = count;
   // Straight from the mapping to the stream: a copy in between cost a 46 MB
   // allocation and its page faults per draw on the glmark2 frame.
   const auto bytes = static_cast<GLsizeiptr>(uint64_t(count) * sizeof(GpuRecord));
-  if (bytes == 0) write(kDraw, &c, sizeof c);
+  if (bytes == 0) write(tag, &c, sizeof c);
   mapBuffer(record_buffer_, kRecordHeaderBytes, bytes,
-            [&](const void* records) { write(kDraw, &c, sizeof c, records, static_cast<uint64_t>(bytes)); });
+            [&](const void* records) { write(tag, &c, sizeof c, records, static_cast<uint64_t>(bytes)); });
+}
+
+void Recorder::finish(Pending& p) {
+  if (p.chunk.reason != kCaptured) {
+    write(kDraw, &p.chunk, sizeof p.chunk);
+    return;
+  }
+  takeRecords(p, p.chunk, kDraw);
 }
 
 void Recorder::swap() {

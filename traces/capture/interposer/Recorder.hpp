@@ -6,6 +6,8 @@
 // Inert unless OITSIM_STREAM names the stream file (so a child process that
 // inherits LD_LIBRARY_PATH is not affected). Environment:
 //   OITSIM_STREAM=path   OITSIM_FRAMES=A-B   OITSIM_VERIFY=1   OITSIM_MAX_RECORDS=N
+//   OITSIM_RECORDS_PER_PIXEL=K (the record buffer holds K records per pixel of the
+//   frame, at most N or GL's largest storage block; 0 = that maximum)
 #pragma once
 
 #include <cstdint>
@@ -36,7 +38,8 @@ class Recorder {
   void afterLink(GLuint program);
   void forgetProgram(GLuint program);
 
-  // One draw call: `call` issues it (possibly twice: the verify drawing first).
+  // One draw call: `call` issues it (possibly twice: the verify drawing, which
+  // counts and records, first).
   template <typename Call>
   void draw(const char* function, bool multi, Call&& call) {
     Pending p;
@@ -79,7 +82,11 @@ class Recorder {
   bool begin(const char* function, bool multi, Pending& p);
   void readState(Pending& p);
   uint32_t classify(Pending& p, GLint program);
+  // Binds the record buffer (counter cleared) and turns recording on for the draw.
   void arm(Pending& p);
+  // Turns recording off and writes the draw's records as a chunk `tag` (kDraw, or
+  // kCheckDraw for the verify drawing), or the draw as overflowing.
+  void takeRecords(const Pending& p, stream::DrawChunk c, uint32_t tag);
   void finish(Pending& p);
   void enterVerify(Pending& p);
   void leaveVerify(Pending& p);
@@ -100,7 +107,8 @@ class Recorder {
 
   bool active_ = false, verify_ = false, gl_ready_ = false, ended_ = false;
   uint32_t first_ = 0, last_ = 0, frame_ = 0, draw_index_ = 0;
-  uint64_t max_records_ = 0, capacity_ = 0;
+  uint64_t max_records_ = 0, capacity_ = 0, limit_ = 0;
+  double records_per_pixel_ = 0;
   std::FILE* out_ = nullptr;
   std::unordered_map<GLuint, ProgramInfo> programs_;
   GLuint record_binding_ = 0, count_binding_ = 0;

@@ -1,8 +1,9 @@
 // --verify inside the retracer: each captured transparent draw is drawn a second
-// time, before the recording draw, into the interposer's own RGBA32F target (cleared
-// to 0 at the frame's first such draw) with the application's blend state and a copy
-// of the application's depth buffer, the injected code counting fragments per pixel.
-// At the swap, the target and the counts go into the stream (kVerify).
+// time (the check drawing), before the recording draw, into the interposer's own
+// RGBA32F target (cleared to 0 at the frame's first such draw) with the
+// application's blend state and a copy of the application's depth buffer, the
+// injected code counting fragments per pixel and recording them (kCheckDraw). At
+// the swap, the target and the counts go into the stream (kVerify).
 #include <algorithm>
 #include <vector>
 
@@ -149,12 +150,17 @@ void Recorder::enterVerify(Pending& p) {
   }
   p.counts = bindStorage(count_binding_, count_buffer_);
   g.glProgramUniform1ui(p.chunk.program, p.info->loc_width, verify_w_);
-  g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 2);
+  // The check drawing records its own fragments too: GL's blend is compared with
+  // the records GL blended, and those with the application's drawing's records
+  // (llvmpipe shades a draw per render-target format: the two drawings' colours
+  // can differ, traces/CAPTURE.md).
+  arm(p);
+  g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 3);
 }
 
 void Recorder::leaveVerify(Pending& p) {
   RealGl& g = gl();
-  g.glProgramUniform1ui(p.chunk.program, p.info->loc_mode, 0);
+  takeRecords(p, p.chunk, kCheckDraw);  // recording off, the application's binding back
   if (p.saved_clamp >= 0) g.glClampColor(kClampFragmentColor, static_cast<GLenum>(p.saved_clamp));
   restoreStorage(count_binding_, p.counts);
   g.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(p.saved_draw_fb));

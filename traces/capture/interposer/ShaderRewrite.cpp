@@ -94,12 +94,12 @@ std::string recordFunction(const Bindings& b, const char* hp) {
     s += std::string("uniform ") + hp + "uint " + u + ";\n";
   s += std::string("void oitsim_record(") + hp + "vec4 oitsim_colour, " + hp + "float oitsim_depth) {\n";
   s += "  " + std::string(hp) + "uvec2 oitsim_xy = uvec2(gl_FragCoord.xy);\n";
-  s += "  if (oitsim_mode == 1u) {\n";
+  s += "  if ((oitsim_mode & 1u) != 0u) {\n";
   s += "    " + std::string(hp) + "uint oitsim_i = atomicAdd(oitsim_count, 1u);\n";
   s += "    if (oitsim_i < oitsim_capacity)\n";
   s += "      oitsim_records[oitsim_i] = OitsimRecord(oitsim_xy.x | (oitsim_xy.y << 16), oitsim_depth, "
        "uint(gl_PrimitiveID), oitsim_draw, oitsim_colour);\n";
-  s += "  } else if (oitsim_mode == 2u) {\n";
+  s += "  }\n  if ((oitsim_mode & 2u) != 0u) {\n";
   s += "    atomicAdd(oitsim_pixel_counts[oitsim_xy.y * oitsim_width + oitsim_xy.x], 1u);\n";
   s += "  }\n}\n";
   return s;

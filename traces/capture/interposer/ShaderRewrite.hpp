@@ -65,7 +65,7 @@ std::string rewriteEs(std::string_view source, const SourceInfo& info, const std
                       const Bindings& b, bool early_tests);
 
 // Names of the uniforms the injected code declares (set with glProgramUniform*).
-inline constexpr const char* kUniformMode = "oitsim_mode";       // 0 off, 1 record, 2 count
+inline constexpr const char* kUniformMode = "oitsim_mode";       // bits: 1 record, 2 count per pixel
 inline constexpr const char* kUniformDraw = "oitsim_draw";
 inline constexpr const char* kUniformCapacity = "oitsim_capacity";
 inline constexpr const char* kUniformWidth = "oitsim_width";
