@@ -7,6 +7,33 @@ namespace oit::rop {
 
 namespace {
 __extension__ typedef unsigned __int128 U128;  // n x delay can pass 2^64
+
+// The part [l, e) of a wait's DRAM queueing and transfer, by cause (the
+// WaitSplit's inner ends clamped to it).
+struct QueueSplit {
+  uint64_t refresh = 0, bank = 0, turnaround = 0, bandwidth = 0;
+};
+// A WaitSplit built without the queue's inner ends (below latency_end): all
+// of its queueing is the bus's.
+WaitSplit withQueueEnds(WaitSplit w) {
+  if (w.turn_end < w.latency_end) w.refresh_end = w.bank_end = w.turn_end = w.latency_end;
+  return w;
+}
+QueueSplit queueSplit(const WaitSplit& ws, Cycle l, Cycle e) {
+  // [l, e) covers part of the queueing (in its proportions, as
+  // RootCauseAccount::account) and the transfer after it.
+  const WaitSplit w = withQueueEnds(ws);
+  const Cycle q0 = std::clamp(w.latency_end, l, e), q1 = std::clamp(w.queue_end, q0, e);
+  QueueSplit s;
+  if (q1 > q0) {
+    const uint64_t len = q1 - q0, all = w.queue_end - w.latency_end;
+    s.refresh = uint64_t(U128(len) * (w.refresh_end - w.latency_end) / all);
+    s.bank = uint64_t(U128(len) * (w.bank_end - w.refresh_end) / all);
+    s.turnaround = uint64_t(U128(len) * (w.turn_end - w.bank_end) / all);
+  }
+  s.bandwidth = (e - l) - s.refresh - s.bank - s.turnaround;
+  return s;
+}
 }  // namespace
 
 const char* rootCauseKey(RootCause c) {
@@ -24,6 +51,9 @@ const char* rootCauseKey(RootCause c) {
     case RootCause::Atomics: return "atomic_wait";
     case RootCause::ListWalk: return "list_walk";
     case RootCause::Sort: return "sort";
+    case RootCause::DramBankConflict: return "dram_bank_conflict";
+    case RootCause::DramTurnaround: return "dram_turnaround";
+    case RootCause::DramRefresh: return "dram_refresh";
   }
   return "?";
 }
@@ -38,9 +68,17 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest) 
     const Cycle dram = std::min(d.done, ready) - now;
     const Cycle xfer = std::min(dram, d.transfer);
     const Cycle lat = std::min(dram - xfer, d.unloaded);
+    const Cycle queue = dram - xfer - lat;
     w.latency_end = now + lat;
-    w.queue_end = w.latency_end + (dram - xfer - lat);
+    w.queue_end = w.latency_end + queue;
     w.dram_end = w.queue_end + xfer;
+    // The queueing in the controller's proportions (whole shares; the cycles
+    // left over to the bus, all of them when the controller saw nothing).
+    const uint64_t sum = d.queue.sum();
+    auto part = [&](uint64_t x) { return sum ? Cycle(U128(queue) * x / sum) : 0; };
+    w.refresh_end = w.latency_end + part(d.queue.refresh);
+    w.bank_end = w.refresh_end + part(d.queue.bank);
+    w.turn_end = w.bank_end + part(d.queue.turnaround);
   }
   return w;
 }
@@ -71,6 +109,21 @@ void RootCauseAccount::account(Cycle now) {
       cycles_[size_t(RootCause::DramBandwidth)] += bw;
       at = to;
     }
+    // The queueing: any part of it in the proportions of the whole (which
+    // cycles of a wait's queueing a stage waits for says nothing about which
+    // cause they were; a position order would charge tails to the last one).
+    const WaitSplit w = withQueueEnds(w_);
+    if (w.queue_end > at && w.queue_end > w.latency_end) {
+      const Cycle to = std::min(w.queue_end, now), len = to - at, all = w.queue_end - w.latency_end;
+      const uint64_t r = uint64_t(U128(len) * (w.refresh_end - w.latency_end) / all);
+      const uint64_t b = uint64_t(U128(len) * (w.bank_end - w.refresh_end) / all);
+      const uint64_t t = uint64_t(U128(len) * (w.turn_end - w.bank_end) / all);
+      cycles_[size_t(RootCause::DramRefresh)] += r;
+      cycles_[size_t(RootCause::DramBankConflict)] += b;
+      cycles_[size_t(RootCause::DramTurnaround)] += t;
+      cycles_[size_t(RootCause::DramBandwidth)] += len - r - b - t;
+      at = to;
+    }
     charge(w_.dram_end, RootCause::DramBandwidth);
     cycles_[size_t(w_.rest)] += now - at;
   }
@@ -85,7 +138,11 @@ void DelayShares::addWait(Cycle from, Cycle to, const WaitSplit& w) {
   uint64_t lat, bw;
   splitLatency(l - from, from, l, bus_, lat, bw);
   delay_[size_t(RootCause::DramLatency)] += lat;
-  delay_[size_t(RootCause::DramBandwidth)] += bw + (e - l);
+  const QueueSplit q = queueSplit(w, l, e);
+  delay_[size_t(RootCause::DramRefresh)] += q.refresh;
+  delay_[size_t(RootCause::DramBankConflict)] += q.bank;
+  delay_[size_t(RootCause::DramTurnaround)] += q.turnaround;
+  delay_[size_t(RootCause::DramBandwidth)] += bw + q.bandwidth;
   delay_[size_t(w.rest)] += to - e;
 }
 
@@ -98,10 +155,16 @@ void DelayShares::addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w) 
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
   const double busy = bus_ ? bus_(from, l) : 0.0;
   const uint64_t span = to - from, lat_all = n * (l - from) / span;
-  const uint64_t lat = uint64_t(double(lat_all) * (1.0 - busy) + 0.5), bw = (lat_all - lat) + n * (e - l) / span;
+  const uint64_t lat = uint64_t(double(lat_all) * (1.0 - busy) + 0.5);
+  const QueueSplit q = queueSplit(w, l, e);
+  const uint64_t refresh = n * q.refresh / span, bank = n * q.bank / span, turn = n * q.turnaround / span;
+  const uint64_t bw = (lat_all - lat) + n * q.bandwidth / span;
+  delay_[size_t(RootCause::DramRefresh)] += refresh;
+  delay_[size_t(RootCause::DramBankConflict)] += bank;
+  delay_[size_t(RootCause::DramTurnaround)] += turn;
   delay_[size_t(RootCause::DramBandwidth)] += bw;
   delay_[size_t(RootCause::DramLatency)] += lat;
-  delay_[size_t(w.rest)] += n - bw - lat;
+  delay_[size_t(w.rest)] += n - bw - lat - refresh - bank - turn;
 }
 
 void DelayShares::chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback) {

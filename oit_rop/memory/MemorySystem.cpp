@@ -140,6 +140,7 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   const uint64_t k0 = chunk_div.div<Pow2>(first), k1 = chunk_div.div<Pow2>(last);  // first and last chunk
   const uint64_t touched_channels = map_.multi_channel ? std::min(channels, k1 - k0 + 1) : 1;
   uint64_t most_bursts = 0;  // on one channel (the probe's transfer)
+  DramQueueParts queue;      // the probe's: of the run that ends last
   for (uint64_t j = 0; j < touched_channels; ++j) {
     unsigned ch = 0;
     uint64_t lb = first, hi = last;  // the channel's local bursts [lb, hi]; one channel: local = global
@@ -159,7 +160,11 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
       uint64_t row;
       map_.bankRow<Pow2>(row_div.div<Pow2>(lb), bank_no, row);
       lb += n;
-      done = std::max(done, write ? postWrite(ch, bank_no, row, n, arrive) : bookRun<false>(ch, bank_no, row, n, arrive));
+      const uint64_t end = write ? postWrite(ch, bank_no, row, n, arrive) : bookRun<false>(ch, bank_no, row, n, arrive);
+      if (end >= done) {  // the run the request completes with says what its queueing was
+        done = end;
+        queue = write ? channels_[ch].drain_queue : run_queue_;
+      }
     }
   }
   stats_.row_hits = hits_;
@@ -167,8 +172,79 @@ Cycle MemorySystem::book(Cycle now, uint64_t addr, uint32_t bytes, bool write) {
   const Cycle completion = DramTimings::ceilCycles(done);
   stats_.last_completion = std::max(stats_.last_completion, completion);
   if (completion >= probe_.done)
-    probe_ = {completion, unloadedCycles(write), write ? 0 : transferCycles(most_bursts)};
+    probe_ = {completion, unloadedCycles(write), write ? 0 : transferCycles(most_bursts), queue};
   return completion;
+}
+
+namespace {
+// Adds [from, from + len) ticks to per-block totals (blocks of 2^shift ticks).
+void addToBlocks(std::vector<uint64_t>& blocks, uint64_t from, uint64_t len, unsigned shift) {
+  for (uint64_t at = from, end = from + len; at < end;) {
+    const uint64_t block = at >> shift, block_end = (block + 1) << shift;
+    const uint64_t part = std::min(end, block_end) - at;
+    if (block >= blocks.size()) blocks.resize(std::max<size_t>(block + 1, blocks.size() * 2), 0);
+    blocks[block] += part;
+    at += part;
+  }
+}
+// The ticks of per-block totals over [from, to), each block's taken as spread over it.
+uint64_t blockTicks(const std::vector<uint64_t>& blocks, uint64_t from, uint64_t to, unsigned shift) {
+  double sum = 0.0;
+  const double size = double(uint64_t(1) << shift);
+  for (uint64_t b = from >> shift; b <= (to - 1) >> shift && b < blocks.size(); ++b) {
+    const uint64_t lo = std::max(from, b << shift), hi = std::min(to, (b + 1) << shift);
+    sum += double(blocks[b]) * double(hi - lo) / size;
+  }
+  return uint64_t(sum + 0.5);
+}
+}  // namespace
+
+DramQueueParts MemorySystem::queueParts(Channel& c, uint64_t earliest, uint64_t arrive, uint64_t column, uint64_t xfer,
+                                        bool refreshed, bool in_gap) {
+  // The run's data start beyond an idle controller's (ideal: arrival, after
+  // any refresh, + tRCD + CL), by what held it. Before the bus was free for
+  // it (bus_free; a read in a gap: the gap) the channel's bus was busy moving
+  // other data (bandwidth) or idle for what the runs booked there waited for
+  // (the channel's record of its idle time by cause, per 256-cycle block);
+  // after that its own bank (its column command later than tRCD after
+  // arrival) and then its turnaround (tWTR / tRTW).
+  constexpr unsigned shift = kTickShift + kBusyBlockShift;
+  const uint64_t cl = t_.cl, ideal = earliest + t_.trcd + cl;
+  DramQueueParts q;
+  q.refresh = earliest - arrive;
+  const uint64_t busy_until = std::min(xfer, in_gap ? xfer : c.bus_free);
+  if (busy_until > ideal) {
+    uint64_t left = busy_until - ideal;
+    auto take = [&](const std::vector<uint64_t>& blocks) {
+      const uint64_t v = std::min(left, blockTicks(blocks, ideal, busy_until, shift));
+      left -= v;
+      return v;
+    };
+    q.bank += take(c.idle_blocks[0]);
+    q.turnaround += take(c.idle_blocks[1]);
+    q.refresh += take(c.idle_blocks[2]);
+    q.bus = left;
+  }
+  const uint64_t from = std::max(ideal, busy_until);
+  uint64_t bank_end = from;
+  if (xfer > from) {
+    bank_end = std::min(xfer, std::max(from, column + cl));
+    q.bank += bank_end - from;
+    q.turnaround += xfer - bank_end;  // tWTR before the column command, tRTW before write data
+  }
+  if (!in_gap && xfer > c.bus_free) {
+    // The bus idles over [bus_free, xfer): recorded by what this run waited
+    // for there (after a refresh: the refresh and the row's reopening; the
+    // part nobody asked for is not recorded).
+    auto record = [&](unsigned k, uint64_t lo, uint64_t hi) {
+      lo = std::max(lo, c.bus_free);
+      if (hi > lo) addToBlocks(c.idle_blocks[k], lo, hi - lo, shift);
+    };
+    record(0, from, bank_end);
+    record(1, bank_end, xfer);
+    if (refreshed) record(2, arrive, std::min(from, ideal));
+  }
+  return q;
 }
 
 void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
@@ -221,8 +297,17 @@ uint64_t MemorySystem::postWrite(unsigned ch, unsigned bank_no, uint64_t row, ui
 void MemorySystem::drainBatch(unsigned ch, uint64_t at, bool all) {
   DramWriteQueue& q = channels_[ch].writes;
   // takeBatch() returns the queue's own vector: bookRun does not touch the queue.
-  for (const DramWriteQueue::Run& r : q.takeBatch(all))
+  // A write that waits for room waits for this batch: its data on the bus
+  // (bandwidth) and the idle bus its runs met (turnaround, bank, refresh).
+  DramQueueParts batch;
+  for (const DramWriteQueue::Run& r : q.takeBatch(all)) {
     q.drained(bookRun<true>(ch, r.bank, r.row, r.bursts, std::max(at, r.accepted)), r.bursts);
+    batch.bus += r.bursts * t_.burst;
+    batch.bank += run_queue_.bank;
+    batch.turnaround += run_queue_.turnaround;
+    batch.refresh += run_queue_.refresh;
+  }
+  channels_[ch].drain_queue = batch;
 }
 
 Cycle MemorySystem::drainWrites(Cycle now) {
@@ -255,7 +340,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   }
   Channel& c = channels_[ch];
   Bank& bank = banks_[size_t(ch) * cfg_.banks + bank_no];
-  const uint64_t arrive = earliest;
+  const uint64_t arrive = earliest;  // a refresh may move `earliest` on
   const uint64_t cl = t_.cl, burst = t_.burst, trcd = t_.trcd, trp = t_.trp, tras = t_.tras;
   const uint64_t refresh_period = t_.refresh_period;
   const bool open_row = cfg_.open_row;
@@ -344,6 +429,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
     refreshed = true;
   }
   if (refresh_period) bank = b;
+  run_queue_ = queueParts(c, earliest, arrive, column, xfer, refreshed, in_gap);
   hits_ += run_hits;
   misses_ += n - run_hits;
   const uint64_t end = xfer + len;

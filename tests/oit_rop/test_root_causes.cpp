@@ -133,4 +133,61 @@ TEST(RootCauseAccount, UnloadedAccessWhileTheBusIsBusyIsBandwidth) {
   EXPECT_EQ(at(a, RootCause::DramBandwidth), 21u);
 }
 
+// The queueing split by what the controller waited for (round configuration
+// as above: controller 40, tRCD = CL = tRP = 11, a burst 4, 8 KiB rows, 8
+// banks; tWTR 6 clocks = 6 cycles):
+//  - a bank conflict: a read of row 0 of bank 0 (done 66), then one of row 1
+//    of bank 0 (byte 8 x 8 KiB) asked at 0: its precharge waits for the first
+//    one's data (66), precharge to 77, activate to 88, data from 99: done
+//    103, 66 unloaded and 37 of queueing: from arrival + tRCD + CL = 62 to
+//    66 the bus moved the first read's data (bandwidth, 4), from 66 to 99
+//    the bank opened the row (bank conflict, 33);
+//  - a turnaround: a write to bank 1 drained at 40 (activate 40, data
+//    [62, 66)), then a read of bank 2 asked at 0: its row opens at 51, the
+//    bus is free at 66 (4 cycles behind arrival + tRCD + CL = 62: the bus),
+//    its column command waits for tWTR after the write data: 72, data at 83,
+//    done 87: 21 of queueing, 4 the bus's, 17 the turnaround's (tWTR + CL).
+TEST(RootCauseAccount, DramQueueingSplitsByWhatTheControllerWaitedFor) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  m.access(0, 0, 64, false, Surface::BlendArrays);
+  ASSERT_EQ(m.bankOf(8 * 8192), m.bankOf(0));
+  ASSERT_NE(m.rowOf(8 * 8192), m.rowOf(0));
+  m.resetProbe();
+  ASSERT_EQ(m.access(0, 8 * 8192, 64, false, Surface::BlendArrays), 103u);
+  WaitSplit w = splitWait(0, 103, m.probe());
+  EXPECT_EQ(w.latency_end, 66u);
+  EXPECT_EQ(w.refresh_end, 66u);
+  EXPECT_EQ(w.bank_end, 99u);
+  EXPECT_EQ(w.turn_end, 99u);
+  EXPECT_EQ(w.queue_end, 103u);
+  RootCauseAccount a;
+  a.setWait(0, w);
+  a.account(103);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 4u);
+
+  MemorySystem n(roundDramConfig(1), kRoundMhz);
+  ASSERT_EQ(n.twtrCycles(), 6.0);
+  ASSERT_EQ(n.access(0, 8192, 64, true, Surface::BlendArrays), 40u);
+  ASSERT_EQ(n.drainWrites(40), 66u);
+  n.resetProbe();
+  ASSERT_EQ(n.access(0, 2 * 8192, 64, false, Surface::BlendArrays), 87u);
+  w = splitWait(0, 87, n.probe());
+  RootCauseAccount b;
+  b.setWait(0, w);
+  b.account(87);
+  EXPECT_EQ(at(b, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(b, RootCause::DramTurnaround), 17u);
+  EXPECT_EQ(at(b, RootCause::DramBandwidth), 4u);
+  EXPECT_EQ(at(b, RootCause::DramBankConflict), 0u);
+  EXPECT_EQ(b.total(), 87u);
+  // The approximate engine's shares take the same split.
+  DelayShares s;
+  RootCauseAccount d;
+  s.addWait(0, 87, w);
+  s.chargeTo(d, 87, RootCause::ScoreboardFull);
+  EXPECT_EQ(d.cycles(), b.cycles());
+}
+
 }  // namespace
