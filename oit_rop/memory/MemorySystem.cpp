@@ -248,15 +248,7 @@ DramQueueParts MemorySystem::queueParts(Channel& c, uint64_t earliest, uint64_t 
 }
 
 void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
-  // Split at block boundaries (a long run spans several).
-  constexpr unsigned shift = kTickShift + kBusyBlockShift;
-  for (uint64_t at = from_tick, end = from_tick + len; at < end;) {
-    const uint64_t block = at >> shift, block_end = (block + 1) << shift;
-    const uint64_t part = std::min(end, block_end) - at;
-    if (block >= busy_blocks_.size()) busy_blocks_.resize(std::max<size_t>(block + 1, busy_blocks_.size() * 2), 0);
-    busy_blocks_[block] += part;
-    at += part;
-  }
+  addToBlocks(busy_blocks_, from_tick, len, kTickShift + kBusyBlockShift);
 }
 
 double MemorySystem::busShare(Cycle from, Cycle to) const {

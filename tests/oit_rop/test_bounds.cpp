@@ -182,19 +182,30 @@ TEST_P(Bounds, L2BandwidthBound) {
 // cycles, which the root causes charge to dram_turnaround, 4.1 % of the
 // frame on the cycle engine, leaving dram_bandwidth 89.6 %; with the preset's
 // turnarounds and refresh the frame takes +13.2 % over the bus time.)
-TEST_P(Bounds, DramBoundFrame) {
+// The DRAM frames' configuration: an 8 KiB ROP cache, 1 fragment per clock,
+// one DDR3-1600 channel without refresh or turnarounds (each test adds the
+// mechanism it stresses), and their run: four layers of 64 x 32 pixels.
+RopConfig dramFrameConfig(SimEngine engine) {
   RopConfig c = base();
-  c.sim.engine = GetParam();
+  c.sim.engine = engine;
   c.cache.size_bytes = 8 * 1024;
   c.input.fragments_per_clock = 1.0;
   c.dram.channels = 1;
   c.dram.trefi_ns = c.dram.trfc_ns = 0;
   c.dram.twtr = c.dram.trtw = 0;
+  return c;
+}
+ChildRun runDramFrame(const RopConfig& c) {
+  const auto fs = layersOf(64, 32, 4);
+  return runInChild([&] { return timed("mlab", rgba8(8), fs, 64, 32, c); });
+}
+
+TEST_P(Bounds, DramBoundFrame) {
+  RopConfig c = dramFrameConfig(GetParam());
   c.dram.write_queue = 128;
   c.dram.write_high = 112;
   c.dram.write_low = 32;
-  const auto fs = layersOf(64, 32, 4);
-  const auto r = runInChild([&] { return timed("mlab", rgba8(8), fs, 64, 32, c); });
+  const auto r = runDramFrame(c);
   ASSERT_TRUE(r.ok) << r.error;
   const uint64_t read = r.stats["memory"]["dram_read_bytes"]["total"].get<uint64_t>();
   const uint64_t written = r.stats["memory"]["dram_write_bytes"]["total"].get<uint64_t>();
@@ -214,18 +225,11 @@ TEST_P(Bounds, DramBoundFrame) {
 // 5.75 cycles of data per 64 B line (a 256 B colour tile: 23): the bus is
 // busy about 1-4 % of the time, the frame waits for the bank.
 TEST_P(Bounds, DramBankConflictFrame) {
-  RopConfig c = base();
-  c.sim.engine = GetParam();
-  c.cache.size_bytes = 8 * 1024;
-  c.input.fragments_per_clock = 1.0;
-  c.dram.channels = 1;
+  RopConfig c = dramFrameConfig(GetParam());
   c.dram.banks = 1;
   c.dram.open_row = false;
   c.dram.tras = 400;
-  c.dram.trefi_ns = c.dram.trfc_ns = 0;
-  c.dram.twtr = c.dram.trtw = 0;
-  const auto fs = layersOf(64, 32, 4);
-  const auto r = runInChild([&] { return timed("mlab", rgba8(8), fs, 64, 32, c); });
+  const auto r = runDramFrame(c);
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_LT(r.stats["timing"]["utilization"]["dram_bus"].get<double>(), 0.05);
   expectBoundBy(r, "dram_bank_conflict");
@@ -236,17 +240,11 @@ TEST_P(Bounds, DramBankConflictFrame) {
 // the 8192 write-backs between two fills switches the bus twice, 2 x 287.5 +
 // CL against 2 x 5.75 cycles of data: the bus idles while it turns around.
 TEST_P(Bounds, DramTurnaroundFrame) {
-  RopConfig c = base();
-  c.sim.engine = GetParam();
-  c.cache.size_bytes = 8 * 1024;
-  c.input.fragments_per_clock = 1.0;
-  c.dram.channels = 1;
-  c.dram.trefi_ns = c.dram.trfc_ns = 0;
+  RopConfig c = dramFrameConfig(GetParam());
   c.dram.twtr = c.dram.trtw = 200;
   c.dram.write_queue = c.dram.write_high = 1;
   c.dram.write_low = 0;
-  const auto fs = layersOf(64, 32, 4);
-  const auto r = runInChild([&] { return timed("mlab", rgba8(8), fs, 64, 32, c); });
+  const auto r = runDramFrame(c);
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_LT(r.stats["timing"]["utilization"]["dram_bus"].get<double>(), 0.05);
   expectBoundBy(r, "dram_turnaround");
