@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include "oit_rop/memory/CacheLevel.hpp"
 #include <malloc.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include <stdexcept>
 
 #include "apps/Progress.hpp"
+#include "model/FunctionalRenderer.hpp"
 
 namespace oit::cli {
 
@@ -76,21 +76,6 @@ void returnLargeBlocksToTheSystem() {
 #endif
 }
 
-uint64_t residentBytes() {
-  unsigned long size = 0, resident = 0;
-  FILE* f = std::fopen("/proc/self/statm", "r");
-  if (!f) return 0;
-  const int n = std::fscanf(f, "%lu %lu", &size, &resident);
-  std::fclose(f);
-  return n == 2 ? uint64_t(resident) * uint64_t(::sysconf(_SC_PAGESIZE)) : 0;
-}
-
-uint64_t peakResidentBytes() {
-  struct rusage ru {};
-  if (::getrusage(RUSAGE_SELF, &ru) != 0) return 0;
-  return uint64_t(ru.ru_maxrss) * 1024;  // KiB on Linux
-}
-
 MemoryBudget parseMemoryBudget(const std::string& text) {
   const uint64_t physical = physicalMemoryBytes();
   auto share = [&](double percent, const std::string& source) {
@@ -147,12 +132,16 @@ constexpr uint64_t kReaderBytes = 3 * kMiB;
 // The timing model's tables beyond the per-pixel state it shares with the
 // functional mode (the ordered lock's release table, per-tile cache, depth and
 // HiZ entries, the partitions' queues, the DRAM controller's queues, SystemC's
-// thread stacks). Measured with --reference none at 1024 x 512 and 2048 x 1024
-// (timing minus functional peak, glass): alpha 4 and 12 MiB (5.3 B per pixel +
-// 1.3 MiB), mlab k=8 7 and 21 MiB (9.3 B per pixel + 2.3 MiB). 7 B per pixel +
-// 2 MiB lies between them; the functional terms' own margin covers mlab's
-// rest (CliReliability.EstimateCoversTheMeasuredPeak).
-constexpr uint64_t kTimingBytesPerPixel = 7;
+// thread stacks): they grow with the frame's state. Measured on commit
+// 16a4d90's tree as timing minus functional peak with --reference none and no
+// shared levels (--set l2.size_bytes=0 --set l3.size_bytes=0), glass at
+// 1280 x 720: alpha (16 B of state per pixel) 13.6 B per pixel, wboit (20)
+// 14.8, mlab k=2 (40) 22.8, k=4 (64) 38.7, k=8 (160) 71.7; mlab k=4 at
+// 640 x 360 and 2560 x 1440 gives the same per pixel (+1 MiB). 8 B + half the
+// state per pixel covers each (the 7 B per pixel measured before the memory
+// hierarchy's tables fell 23 MiB short at 1280 x 720 with mlab k=4).
+constexpr uint64_t kTimingBytesPerPixel = 8;
+constexpr double kTimingShareOfState = 0.5;
 constexpr uint64_t kTimingBytes = 2 * kMiB;
 // The exact reference beside its band: the band file's write buffers and one
 // read chunk (FunctionalRendererBands.cpp).
@@ -201,7 +190,9 @@ RunMemoryEstimate estimateRunMemory(const RunShape& s, uint64_t base, uint64_t b
   // The run: opaque layer, per-pixel state, pool, its image; the timing
   // model's own tables.
   uint64_t render = opaque + s.bytes_per_pixel * px + pool + image + kReaderBytes;
-  if (s.timing) render += kTimingBytesPerPixel * px + kTimingBytes + s.timing_level_bytes;
+  if (s.timing)
+    render += (kTimingBytesPerPixel + uint64_t(kTimingShareOfState * double(s.bytes_per_pixel))) * px + kTimingBytes +
+              s.timing_level_bytes;
   // --seeds N: children simulate (each a whole run, in its own process, a
   // fork of this one) and send back their images, which this process keeps to
   // the end (and seed 0's once more as the run's own); flicker's sRGB8 codes
@@ -269,5 +260,17 @@ std::string outOfMemoryMessage(const RunMemoryEstimate& e, const MemoryBudget& b
       trace, s.width, s.height, algo, s.timing ? "timing" : "functional", gib(e.peak()), e.peakPhase().name,
       gib(budget.bytes), budget.source);
 }
+
+uint64_t transparentFragments(FragmentSource& src) {
+  const model::DrawClassifier classes(src.header());
+  src.rewind();
+  uint64_t n = 0;
+  model::DrawRun draws(classes);
+  for (auto b = src.next(); !b.empty(); b = src.next())
+    for (const Fragment& f : b) n += draws.isOpaque(f.draw) ? 0 : 1;
+  src.rewind();
+  return n;
+}
+
 
 }  // namespace oit::cli

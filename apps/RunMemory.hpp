@@ -11,6 +11,8 @@
 #pragma once
 
 #include "oit_rop/config/RopConfig.hpp"
+#include "traces/ResidentMemory.hpp"
+#include "traces/TraceIO.hpp"
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -20,9 +22,7 @@ namespace oit::cli {
 // Physical memory: the machine's RAM, or the memory limit of the cgroup this
 // process runs in (a container, a Slurm job) when that is less; 0 unknown.
 uint64_t physicalMemoryBytes();
-// Resident set of this process now, and its peak so far (bytes).
-uint64_t residentBytes();
-uint64_t peakResidentBytes();
+// residentBytes() and peakResidentBytes(): traces/ResidentMemory.hpp.
 
 // Makes every block of 256 KiB or more come from the kernel and go back to it
 // when freed. glibc otherwise raises that threshold to the size of the last
@@ -93,5 +93,10 @@ void checkRunFitsBudget(const RunMemoryEstimate& e, const MemoryBudget& budget, 
 // The one line for an allocation that failed anyway (std::bad_alloc).
 std::string outOfMemoryMessage(const RunMemoryEstimate& e, const MemoryBudget& budget, const std::string& trace,
                                const RunShape& shape, const std::string& algo);
+
+// Counts the fragments of transparent draws (one pass over `src`, rewound
+// before and after): the most the A-buffer under test can store, for its
+// reservation and RunShape::fragments (the record count bounds it less tightly).
+uint64_t transparentFragments(FragmentSource& src);
 
 }  // namespace oit::cli

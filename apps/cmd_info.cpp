@@ -11,6 +11,7 @@
 #include "apps/Progress.hpp"
 #include "model/Image.hpp"
 #include "traces/TraceStats.hpp"
+#include "traces/UnmodelledDraws.hpp"
 
 namespace oit::cli {
 namespace {
@@ -123,6 +124,8 @@ void runInfo(const InfoArgs& a) {
                             {"fragments", d.fragments},
                             // as the table's prims>=: the largest primitive id + 1, a lower bound
                             {"primitives_at_least", d.fragments ? d.max_prim + 1ull : 0ull}});
+    const UnmodelledDraws u = unmodelledDraws(h.draws);
+    j["not_modelled"] = {{"draws", u.draws}, {"fragments", u.fragments}};
     j["depth_complexity"] = {{"all", complexityJson(st.all)},
                              {"transparent", complexityJson(st.transparent)},
                              {"opaque", complexityJson(st.opaque)}};
@@ -147,6 +150,9 @@ void runInfo(const InfoArgs& a) {
                d.draw.name, d.fragments,
                st.fragments ? 100.0 * double(d.fragments) / double(st.fragments) : 0.0,
                d.fragments ? d.max_prim + 1ull : 0ull);
+  if (const UnmodelledDraws u = unmodelledDraws(h.draws); u.draws)
+    fmt::print("not modelled {} (blend modes the model does not blend; in the draw state table, in no record)\n",
+               u.describe());
   fmt::print("covered      {} pixels ({:.1f}%) by any fragment\n", st.all.covered_pixels,
              pixels ? 100.0 * double(st.all.covered_pixels) / double(pixels) : 0.0);
   printComplexity("depth complexity, transparent fragments per covered pixel:", st.transparent, pixels);

@@ -2,19 +2,18 @@
 // A-buffer reference, the enhanced difference and report.json. The timing mode
 // (default) replays it through the SystemC ROP and adds cycles, stalls, DRAM
 // traffic and footprint; its image is the functional one by construction with
-// lock.mode=ordered (image.order). --seeds N: apps/RunSeeds.hpp.
+// lock.mode=ordered (image.order). --seeds N: apps/RunSeeds.hpp; the renders
+// and --reference: apps/RunRender.hpp; the memory pre-check: apps/RunMemory.hpp;
+// the summary lines: apps/RunSummary.hpp.
 //
 // Nothing is written until the whole run has succeeded: a bad trace (which the
 // reader reports with file, byte offset, record and field) leaves no report.
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,7 +22,9 @@
 #include "apps/OutputFiles.hpp"
 #include "apps/Progress.hpp"
 #include "apps/RunMemory.hpp"
+#include "apps/RunRender.hpp"
 #include "apps/RunSeeds.hpp"
+#include "apps/RunSummary.hpp"
 #include "apps/StagedOutputs.hpp"
 #include "apps/TraceOptions.hpp"
 #include "model/AlgorithmSettings.hpp"
@@ -34,16 +35,15 @@
 #include "oit_rop/config/ConfigTree.hpp"
 #include "oit_rop/TimingRun.hpp"
 #include "reports/JsonReport.hpp"
-#include "traces/InputFile.hpp"
 #include "traces/TempFiles.hpp"
 #include "traces/TraceIO.hpp"
+#include "traces/UnmodelledDraws.hpp"
 
 namespace oit::cli {
 namespace {
 
 namespace fs = std::filesystem;
 using model::AlgorithmParams;
-using model::RenderResult;
 
 struct RunArgs {
   std::string trace, out, algo = "mlab", mode = "timing", format = "fp32";
@@ -64,198 +64,6 @@ struct RunArgs {
   unsigned seeds = 0;        // --seeds N (0: not given)
   bool seeds_given = false;
 };
-
-struct TimedRender {
-  RenderResult result;
-  double wall_seconds = 0.0;
-};
-
-TimedRender renderWith(FragmentSource& src, model::OitAlgorithm& algo, const model::Rgb& clear,
-                       bool show_progress, const std::string& label) {
-  Progress progress(label, show_progress);
-  model::RenderOptions ro;
-  ro.clear_colour = clear;
-  ro.progress = [&](const model::RenderProgress& p) {
-    const double within = p.fragments_total ? double(p.fragments_done) / double(p.fragments_total) : 0.0;
-    progress.update((double(p.pass) + within) / double(p.passes),
-                    fmt::format("pass {}/{} {}", p.pass + 1, p.passes, p.what));
-  };
-  model::FunctionalRenderer renderer(ro);
-  const auto t0 = std::chrono::steady_clock::now();
-  TimedRender t{renderer.render(src, algo), 0.0};
-  t.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  progress.finish();
-  return t;
-}
-
-// The exact reference in bands of at most `band_bytes` (heads + nodes); the
-// band file, when there is more than one band, goes to `spill_dir`.
-model::BandedRender renderReference(FragmentSource& src, const model::Rgb& clear, uint64_t band_bytes,
-                                    const std::string& spill_dir, bool show_progress, double& seconds) {
-  Progress progress("reference", show_progress);
-  model::RenderOptions ro;
-  ro.clear_colour = clear;
-  ro.progress = [&](const model::RenderProgress& p) {
-    const double within = p.fragments_total ? double(p.fragments_done) / double(p.fragments_total) : 0.0;
-    progress.update((double(p.pass) + within) / double(p.passes), std::string(p.what));
-  };
-  auto abuffer = model::makeAlgorithm("abuffer", {});
-  const auto t0 = std::chrono::steady_clock::now();
-  model::BandedRender r = model::FunctionalRenderer(ro).renderInBands(src, *abuffer, {band_bytes, spill_dir});
-  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  progress.finish();
-  return r;
-}
-
-// --reference FILE.pfm, before any work: a regular file whose PFM header
-// gives the frame's size and whose length fits it (readPfm checks the rest
-// when the file is read, after the run).
-void checkReferenceFile(const std::string& path, uint32_t width, uint32_t height) {
-  const InputFile in = openInputFile(path);
-  if (!in) throw std::invalid_argument(fmt::format("--reference {}: {} (expected a PFM image)", path, in.problem));
-  const uint64_t payload = uint64_t(width) * height * 12;  // RGB floats; a grey "Pf" is a third of it
-  if (in.size > payload + 1024)
-    throw std::invalid_argument(fmt::format(
-        "--reference {}: is {} bytes, more than a {} x {} PFM image takes ({} bytes of pixels): not the reference of "
-        "this trace",
-        path, in.size, width, height, payload));
-  char head[64] = {};
-  const ssize_t n = ::pread(in.fd.get(), head, sizeof head - 1, 0);
-  std::istringstream tokens(std::string(head, n > 0 ? size_t(n) : 0));
-  std::string magic;
-  uint64_t w = 0, hgt = 0;
-  if (!(tokens >> magic >> w >> hgt) || (magic != "PF" && magic != "Pf"))
-    throw std::invalid_argument(
-        fmt::format("--reference {}: not a PFM image (expected the header PF <width> <height>)", path));
-  if (w != width || hgt != height)
-    throw std::invalid_argument(fmt::format("--reference {}: is a {} x {} image, the trace's frame is {} x {}", path,
-                                            w, hgt, width, height));
-}
-
-model::Image readReferenceFile(const std::string& path) {
-  try {
-    return model::readPfm(path);
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(fmt::format("--reference {}", e.what()));
-  }
-}
-
-nlohmann::json metricsJson(const model::ImageMetrics& m) {
-  return {{"rmse", m.rmse},         {"psnr", m.psnr},         {"ssim", m.ssim},
-          {"mean_abs", m.mean_abs}, {"max_abs", m.max_abs}, {"pixels_over_1_255", m.pixels_over_1_255}};
-}
-
-// image.metrics.flip: LDR-FLIP's pooled values and the viewing condition.
-nlohmann::json flipJson(const model::FlipMap& f, double ppd) {
-  return {{"mean", f.stats.mean},
-          {"weighted_median", f.stats.weighted_median},
-          {"weighted_q1", f.stats.weighted_q1},
-          {"weighted_q3", f.stats.weighted_q3},
-          {"max", f.stats.max},
-          {"ppd", ppd}};
-}
-
-// "mlab (k=4, format fp32)": only the settings the algorithm uses
-// (model/AlgorithmSettings.hpp); "abuffer" alone.
-std::string algorithmWithSettings(const std::string& algo, const AlgorithmParams& p) {
-  const model::AlgorithmSettings u = model::algorithmSettings(algo);
-  std::vector<std::string> parts;
-  if (u.layers) parts.push_back(fmt::format("k={}", p.layers));
-  if (u.format) parts.push_back(fmt::format("format {}", model::toString(p.format)));
-  if (u.bits) parts.push_back(fmt::format("bits {}", p.bits));
-  if (u.samples) parts.push_back(fmt::format("samples {}", p.samples));
-  if (u.weight) parts.push_back(fmt::format("weight eq. {}", p.weight));
-  if (u.seed) parts.push_back(fmt::format("seed {}", p.seed));
-  std::string s;
-  for (const auto& part : parts) s += (s.empty() ? "" : ", ") + part;
-  return s.empty() ? algo : algo + " (" + s + ")";
-}
-
-uint64_t num(const nlohmann::json& j, const char* a, const char* b) {
-  if (!j.contains(a) || !j[a].contains(b)) return 0;
-  return j[a][b].get<uint64_t>();
-}
-
-// Cycles, frame time, stalls by cause, DRAM bytes and footprint side by side.
-void printTimingSummary(const nlohmann::json& j) {
-  const auto& t = j["timing"];
-  // The first line answers "what bounds this frame?" and where its time went.
-  const auto& ph = t["phase_cycles"];
-  std::string passes;
-  for (const auto& c : ph["transparent"]) passes += (passes.empty() ? "" : " + ") + std::to_string(c.get<uint64_t>());
-  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), bound by {} ({:.1f} % of partition-cycles); "
-             "phases: opaque {}, transparent {}, resolve {} cycles; {} idle cycles skipped\n",
-             t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
-             t["partitions"].get<uint64_t>(), t["bound_by"]["resource"].get<std::string>(),
-             100.0 * t["bound_by"]["share"].get<double>(), ph["opaque"].get<uint64_t>(), passes.empty() ? "0" : passes,
-             ph["resolve"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
-  // Root causes in descending order (those above 0.05 %), utilisation per resource.
-  std::vector<std::pair<uint64_t, std::string>> causes;
-  uint64_t charged = 0;
-  for (auto it = t["root_cause_cycles"].begin(); it != t["root_cause_cycles"].end(); ++it) {
-    causes.push_back({it.value().get<uint64_t>(), it.key()});
-    charged += causes.back().first;
-  }
-  std::stable_sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  std::string root;
-  for (const auto& [c, k] : causes)
-    if (charged && double(c) / double(charged) >= 0.0005)
-      root += fmt::format("{}{} {:.1f} %", root.empty() ? "" : ", ", k, 100.0 * double(c) / double(charged));
-  fmt::print("root causes {}\n", root.empty() ? "none" : root);
-  std::string util;
-  for (auto it = t["utilization"].begin(); it != t["utilization"].end(); ++it)
-    util += fmt::format("{}{} {:.1f} %", util.empty() ? "" : ", ", it.key(), 100.0 * it.value().get<double>());
-  fmt::print("utilisation {}\n", util);
-  fmt::print("stalls      {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", "stage", "busy", "lock wait",
-             "sb full", "miss wait", "dram bw", "alu busy", "starved");
-  for (auto it = t["stages"].begin(); it != t["stages"].end(); ++it) {
-    const auto& st = it.value();
-    const auto& c = st["stalls"];
-    fmt::print("            {:<13} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}\n", it.key(),
-               st["busy"].get<uint64_t>(), c["lock_wait"].get<uint64_t>(), c["scoreboard_full"].get<uint64_t>(),
-               c["cache_miss_wait"].get<uint64_t>(), c["dram_bandwidth"].get<uint64_t>(),
-               c["alu_busy"].get<uint64_t>(), c["input_starved"].get<uint64_t>());
-  }
-  // The A-buffer's own waits (stall causes atomic_wait, list_walk, sort), when it had any.
-  const auto& ss = t["stages"];
-  const uint64_t atomic = ss["blend_alu"]["stalls"].value("atomic_wait", uint64_t(0));
-  const uint64_t walk = ss["resolve"]["stalls"].value("list_walk", uint64_t(0));
-  const uint64_t sort = ss["resolve"]["stalls"].value("sort", uint64_t(0));
-  if (atomic + walk + sort != 0)
-    fmt::print("            blend_alu atomic wait {}, resolve list walk {}, sort {} cycles\n", atomic, walk, sort);
-  const auto& m = j["memory"];
-  fmt::print("dram        read {} (arrays {}, depth {}, colour {}, resolve {}), written {}, peak {:.1f} GB/s, mean {:.1f} GB/s\n",
-             humanBytes(double(num(m, "dram_read_bytes", "total"))),
-             humanBytes(double(num(m, "dram_read_bytes", "blend_arrays"))),
-             humanBytes(double(num(m, "dram_read_bytes", "depth"))), humanBytes(double(num(m, "dram_read_bytes", "colour"))),
-             humanBytes(double(num(m, "dram_read_bytes", "resolve"))),
-             humanBytes(double(num(m, "dram_write_bytes", "total"))), m["peak_gbps"].get<double>(),
-             m["mean_gbps"].get<double>());
-  // Beside the DRAM line: the traffic against what a perfect cache would move
-  // (what the frame left dirty in the caches counts: it leaves later).
-  std::string rates;
-  for (const auto& l : m["levels"])
-    rates += fmt::format("{}{} {:.1f}%", rates.empty() ? "" : ", ", l["name"].get<std::string>(),
-                         100.0 * l["hit_rate"].get<double>());
-  fmt::print("compulsory  {}; moved {:.2f}x that (DRAM {} + left dirty in the caches {}); hit rate {}\n",
-             humanBytes(double(num(m, "compulsory_bytes", "total"))), m["traffic_over_compulsory"].get<double>(),
-             humanBytes(double(num(m, "dram_read_bytes", "total") + num(m, "dram_write_bytes", "total"))),
-             humanBytes(double(num(m, "end_dirty_bytes", "total"))), rates);
-  const auto& fa = m["footprint"]["allocated"];
-  const auto& ft = m["footprint"]["touched"];
-  auto total = [](const nlohmann::json& o) {
-    uint64_t sum = 0;
-    for (const auto& v : o) sum += v.get<uint64_t>();
-    return sum;
-  };
-  fmt::print("footprint   allocated {} (blend arrays {}), touched {}\n", humanBytes(double(total(fa))),
-             humanBytes(double(fa.value("blend_arrays", uint64_t(0)))), humanBytes(double(total(ft))));
-  const auto& l = j["lock"];
-  const auto& ca = j["cache"];
-  fmt::print("lock/cache  {} conflicts, {} wait cycles, longest {}, peak occupancy {}; cache hit rate {:.1f}%\n",
-             l["conflicts"].get<uint64_t>(), l["wait_cycles"].get<uint64_t>(), l["longest_wait"].get<uint64_t>(),
-             l["peak_occupancy"].get<uint64_t>(), 100.0 * ca["hit_rate"].get<double>());
-}
 
 // Every option is checked before the trace is read or anything is written.
 void checkOptions(const RunArgs& a) {
@@ -289,19 +97,6 @@ void checkOptions(const RunArgs& a) {
 // The files a run writes into --out, the report last.
 constexpr const char* kOutputs[] = {"image.png", "image.pfm", "reference.pfm", "diff.png", "flip.png", "flicker.png",
                                     "report.json"};
-
-// Counts the fragments of transparent draws: the most the A-buffer under
-// test can store (the trace's record count bounds it less tightly).
-uint64_t transparentFragments(FragmentSource& src) {
-  const model::DrawClassifier classes(src.header());
-  src.rewind();
-  uint64_t n = 0;
-  model::DrawRun draws(classes);
-  for (auto b = src.next(); !b.empty(); b = src.next())
-    for (const Fragment& f : b) n += draws.isOpaque(f.draw) ? 0 : 1;
-  src.rewind();
-  return n;
-}
 
 void runReplay(RunArgs& a) {
   returnLargeBlocksToTheSystem();  // what the memory estimate assumes
@@ -500,6 +295,15 @@ void runReplay(RunArgs& a) {
                     {"stored", c.stored},         {"merged", c.merged},   {"discarded", c.discarded},
                     {"dropped_pool_full", algo->bounded() ? 0 : c.discarded},
                     {"outcomes_sum_to_in", c.balanced()}, {"passes", passes}};
+  // Draws of blend modes the model does not blend (v2): counted, not replayed.
+  const UnmodelledDraws unmodelled = unmodelledDraws(h.draws);
+  nlohmann::json by_mode = nlohmann::json::object();
+  for (size_t mode = 0; mode < UnmodelledDraws::kModes; ++mode)
+    if (unmodelled.draws_by_mode[mode])
+      by_mode[toString(static_cast<BlendMode>(mode))] = {{"draws", unmodelled.draws_by_mode[mode]},
+                                                         {"fragments", unmodelled.fragments_by_mode[mode]}};
+  j["fragments"]["not_modelled"] = {
+      {"draws", unmodelled.draws}, {"fragments", unmodelled.fragments}, {"by_blend_mode", by_mode}};
   j["memory"] = {{"bytes_per_pixel", algo->bytesPerPixel()},
                  {"state_bytes", run.result.state_bytes},
                  {"state_read_bytes", c.bytes_read},
@@ -567,6 +371,9 @@ void runReplay(RunArgs& a) {
              timing ? ", preset " + tree.config().preset : "", c.source_passes);
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
+  if (unmodelled.draws)
+    fmt::print("not modelled {}; blend modes the model does not blend: their fragments are in no record, not in the "
+               "image nor the reference\n", unmodelled.describe());
   // The inserts' read-modify-writes at the ROP, not DRAM traffic (that is the
   // timing summary's dram line); the A-buffer's pool nodes count at
   // poolNodeBytes() each, as in the footprint.

@@ -179,9 +179,16 @@ void DelayShares::chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback
   std::array<uint64_t, kRootCauseCount> rem{};
   uint64_t given = 0;
   for (unsigned i = 0; i < kRootCauseCount; ++i) {
-    const U128 x = U128(n) * delay_[i];
-    const uint64_t whole = uint64_t(x / sum);
-    rem[i] = uint64_t(x % sum);
+    if (delay_[i] == 0) continue;  // no share, no remainder
+    uint64_t whole, x64;
+    if (!__builtin_mul_overflow(n, delay_[i], &x64)) {  // the common case: no 128-bit division
+      whole = x64 / sum;
+      rem[i] = x64 % sum;
+    } else {
+      const U128 x = U128(n) * delay_[i];
+      whole = uint64_t(x / sum);
+      rem[i] = uint64_t(x % sum);
+    }
     acc.add(RootCause(i), whole);
     given += whole;
   }

@@ -16,7 +16,7 @@ namespace oit::detail {
 
 
 AtomicFile::AtomicFile(std::string path, size_t buffer_bytes)
-    : path_(std::move(path)), buf_(buffer_bytes) {
+    : path_(std::move(path)), buf_(std::make_unique_for_overwrite<unsigned char[]>(buffer_bytes)), buf_bytes_(buffer_bytes) {
 
   // pid + sequence: concurrent writers (other processes, other threads) never
   // share a temporary file; O_EXCL guarantees it.
@@ -47,9 +47,9 @@ void AtomicFile::fail(const std::string& what) {
 void AtomicFile::append(const void* data, size_t n) {
   const auto* p = static_cast<const unsigned char*>(data);
   while (n > 0) {
-    if (used_ == buf_.size()) flush();
-    const size_t k = std::min(n, buf_.size() - used_);
-    std::memcpy(buf_.data() + used_, p, k);
+    if (used_ == buf_bytes_) flush();
+    const size_t k = std::min(n, buf_bytes_ - used_);
+    std::memcpy(buf_.get() + used_, p, k);
     used_ += k;
     p += k;
     n -= k;
@@ -63,7 +63,7 @@ void AtomicFile::flush() {
   }
   size_t done = 0;
   while (done < used_) {
-    const ssize_t k = ::write(fd_, buf_.data() + done, used_ - done);
+    const ssize_t k = ::write(fd_, buf_.get() + done, used_ - done);
     if (k < 0) {
       if (errno == EINTR) continue;
       fail("cannot write");

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,8 +21,8 @@ class AtomicFile {
 
   // At least n contiguous writable bytes (n <= buffer size); finish with advance(n).
   unsigned char* space(size_t n) {
-    if (buf_.size() - used_ < n) flush();
-    return buf_.data() + used_;
+    if (buf_bytes_ - used_ < n) flush();
+    return buf_.get() + used_;
   }
   void advance(size_t n) { used_ += n; }
   void append(const void* data, size_t n);
@@ -45,7 +46,10 @@ class AtomicFile {
   std::string path_;
   std::string tmp_;
   int fd_ = -1;
-  std::vector<unsigned char> buf_;
+  // Not zero-filled: only written bytes are read, and zeroing 1 MiB faults in
+  // every page of it at each open (a fuzzer's whole budget for a tiny trace).
+  std::unique_ptr<unsigned char[]> buf_;
+  size_t buf_bytes_ = 0;
   size_t used_ = 0;
   uint64_t flushed_ = 0;
   bool committed_ = false;

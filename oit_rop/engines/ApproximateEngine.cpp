@@ -100,6 +100,8 @@ void ApproximateEngine::run() {
   Cycle last_release = p.now_, last_finish = p.now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
   std::vector<Cycle> fill_ready(p.geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
+  PortCalendar ed_exit(p.cfg_.input.fragments_per_clock, 0);  // its leaves at its rate, for fragments held
+  InOrderBlockers ed_blockers;  // EarlyDepth's order (a pass drains before the next starts: per pass is per phase)
   // The input queue through a cursor: its head goes back to the queue before
   // anything else may read it (a refill, a yield, a waiting front end), and a
   // new cursor is taken after anything may have pushed to it.
@@ -207,7 +209,21 @@ void ApproximateEngine::run() {
     if (r.flags & InRec::kNeedsDepthRead) {
       ++depth_reads_needed;
       early = std::max(early, p.early_.depthTileReady(issue, p.tileOf(r.pixel)) + (finish - issue));
-      if (early > passed) shares.addLike(early - passed, issue, issue + (early - finish), p.last_depth_);
+    }
+    // EarlyDepth is in order: not before a fragment that arrived earlier and
+    // waits for its depth tile (the wait is that tile's, as the cycle
+    // engine's back-pressure walk charges it).
+    if (!ed_blockers.empty()) {
+      const Cycle held = ed_blockers.heldUntil(finish, issue);
+      if (held >= early) {  // held: it leaves at the stage's rate from the head's leave on
+        Cycle slot_end;
+        ed_exit.retireBefore(issue);
+        ed_exit.book(held, 1, early, slot_end);
+      }
+    }
+    if (early > passed) {
+      shares.addLike(early - passed, issue, issue + (early - finish), p.last_depth_);
+      ed_blockers.add(finish, early);
     }
     tl[1].addLeavingGap(acc[1], finish, passed, kBusy);
     if (early > passed) tl[1].addLeavingGap(acc[1], passed, early, StageStatus::stall(Stall::CacheMissWait));

@@ -25,6 +25,16 @@
 // and the rare later releases in a small heap. The engine retires lazily:
 // a full scoreboard drops due cycles (dropDue) or pops, and retire() runs
 // only where the exact count is read (a yield, a new peak).
+//
+// InOrderBlockers: an in-order stage (the cycle engine's EarlyDepth) seen
+// from visits in issue order. A fragment leaves such a stage no earlier than
+// every fragment that arrived before it; arrivals (issue + shader latency)
+// are not in visit order, so the engine keeps the fragments that left later
+// than their own latency allowed (blockers: a head waiting for its depth
+// tile) as a staircase of (arrival, leave), leave rising with arrival, and a
+// fragment leaves no earlier than the latest leave of those that arrived at
+// or before its own arrival. (Those visited later but arriving earlier are
+// not seen: a shorter shader latency behind a blocker is missed.)
 #pragma once
 
 #include <algorithm>
@@ -267,6 +277,49 @@ class ReleaseCalendar {
   Cycle base_ = 1;            // cycles before it are retired; the counts hold [base_, base_ + kWindow)
   Cycle next_ = kNone;        // the earliest cycle with a count (kNone: none)
   size_t size_ = 0, due_ = 0;
+};
+
+class InOrderBlockers {
+ public:
+  bool empty() const { return first_ == steps_.size(); }
+  // The latest leave of the blockers that arrived at or before `arrival`
+  // (0: none). Blockers that left at or before `floor` are dropped first (no
+  // later visit can arrive before `floor` and be held by them).
+  Cycle heldUntil(Cycle arrival, Cycle floor) {
+    while (first_ < steps_.size() && steps_[first_].leave <= floor) ++first_;
+    if (first_ == steps_.size()) {
+      steps_.clear();
+      first_ = 0;
+      return 0;
+    }
+    // Leaves rise with arrivals: the last step at or before `arrival` holds it.
+    for (size_t i = steps_.size(); i-- > first_;)
+      if (steps_[i].arrival <= arrival) return steps_[i].leave;
+    return 0;
+  }
+  // A fragment that arrived at `arrival` left at `leave`, later than its own
+  // latency allowed.
+  void add(Cycle arrival, Cycle leave) {
+    size_t i = steps_.size();  // the insertion point: after every step arriving at or before it
+    while (i > first_ && steps_[i - 1].arrival > arrival) --i;
+    if (i > first_ && steps_[i - 1].leave >= leave) return;  // an earlier arrival leaves as late
+    size_t j = i;  // later arrivals that leave no later are held by it: dropped
+    while (j < steps_.size() && steps_[j].leave <= leave) ++j;
+    steps_.erase(steps_.begin() + ptrdiff_t(i), steps_.begin() + ptrdiff_t(j));
+    steps_.insert(steps_.begin() + ptrdiff_t(i), Step{arrival, leave});
+    if (first_ > 64 && first_ * 2 > steps_.size()) {  // compact the dropped front
+      steps_.erase(steps_.begin(), steps_.begin() + ptrdiff_t(first_));
+      first_ = 0;
+    }
+  }
+  size_t size() const { return steps_.size() - first_; }
+
+ private:
+  struct Step {
+    Cycle arrival, leave;
+  };
+  std::vector<Step> steps_;
+  size_t first_ = 0;
 };
 
 }  // namespace oit::rop

@@ -181,8 +181,11 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle loo
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
   line_count_ = size_t(cfg.slices) * sets_ * cfg.ways;
-  lines_.reset(static_cast<Line*>(std::calloc(line_count_, sizeof(Line))));
-  if (!lines_) throw std::bad_alloc();
+  block_bytes_ = size_t(cfg.ways) * (2 * sizeof(uint64_t) + sizeof(Line));
+  way_shift_ = unsigned(std::bit_width(cfg.ways - 1u));
+  way_mask_ = (size_t(1) << way_shift_) - 1;
+  store_.reset(static_cast<unsigned char*>(std::calloc(size_t(cfg.slices) * sets_, block_bytes_)));
+  if (!store_) throw std::bad_alloc();
   set_used_.assign((size_t(cfg.slices) * sets_ + 63) / 64, 0);
   ports_.assign(cfg.slices, PortCalendar(cfg.bytes_per_clock, lookback));
   if (classify_misses) classes_ = std::make_unique<MissClassifier>(cfg.size_bytes / cfg.line_bytes);
@@ -194,7 +197,7 @@ uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classi
   if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0) return 0;
   const uint64_t lines = cfg.size_bytes / cfg.line_bytes;
   const uint64_t sets = lines / cfg.ways;
-  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * sizeof(Line) + lines / 8;
+  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * (2 * sizeof(uint64_t) + sizeof(Line)) + lines / 8;
   // The shadow per line it holds: its key, LRU links and sectors (20 B) and
   // two hash-table entries at half load (line -> slot, line -> sectors seen).
   constexpr uint64_t kShadowBytesPerLine = 96;
@@ -204,31 +207,25 @@ uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classi
 unsigned CacheLevel::sliceOf(uint64_t addr) const { return sliceHash(addr >> line_shift_, cfg_.slices); }
 uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_shift_); }
 
-uint32_t CacheLevel::setIndex(uint64_t line) const {
+[[gnu::always_inline]] inline uint32_t CacheLevel::setIndex(uint64_t line) const {
   const uint64_t in_slice = slice_shift_ >= 0 ? line >> slice_shift_ : line / cfg_.slices;
   return uint32_t(sets_pow2_ ? in_slice & (sets_ - 1) : in_slice % sets_);
 }
 
-CacheLevel::Line* CacheLevel::setOfLine(uint64_t line, unsigned& slice) {
+[[gnu::always_inline]] inline size_t CacheLevel::setOfLine(uint64_t line, unsigned& slice) const {
   slice = sliceHash(line, cfg_.slices);
-  return &lines_[(size_t(slice) * sets_ + setIndex(line)) * cfg_.ways];
-}
-
-CacheLevel::Line* CacheLevel::find(Line* set, uint64_t line) {
-  for (unsigned w = 0; w < cfg_.ways; ++w)
-    if (set[w].tag1 == line + 1) return &set[w];
-  return nullptr;
+  return (size_t(slice) * sets_ + setIndex(line)) << way_shift_;
 }
 
 bool CacheLevel::resident(uint64_t addr) const {
-  CacheLevel& self = const_cast<CacheLevel&>(*this);
   unsigned slice;
-  return self.find(self.setOfLine(addr >> line_shift_, slice), addr >> line_shift_) != nullptr;
+  return find(setOfLine(addr >> line_shift_, slice), addr >> line_shift_) != kNoWay;
 }
 
-void CacheLevel::evict(Cycle now, Line& l) {
-  if (l.tag1 == 0) return;
-  const uint64_t addr = (l.tag1 - 1) * cfg_.line_bytes;
+void CacheLevel::evict(Cycle now, size_t way) {
+  if (tag(way) == 0) return;
+  Line& l = record(way);
+  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
   const unsigned si = unsigned(l.surface);
   if (victim_sink_) {
     // A victim level below takes every eviction, clean or dirty.
@@ -244,22 +241,25 @@ void CacheLevel::evict(Cycle now, Line& l) {
     });
   }
   l = Line{};
+  tag(way) = 0;
+  stamp(way) = 0;
 }
 
-CacheLevel::Line& CacheLevel::allocate(Cycle now, Line* set, uint64_t line) {
-  const size_t set_no = size_t(set - lines_.get()) / cfg_.ways;
+size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
+  const size_t set_no = set >> way_shift_;
   set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
-  Line* victim = &set[0];
+  // The first invalid way, else the least recently used (the first of equal stamps).
+  size_t victim = set;
   for (unsigned w = 0; w < cfg_.ways; ++w) {
-    if (set[w].tag1 == 0) {
-      victim = &set[w];
+    if (tag(set + w) == 0) {
+      victim = set + w;
       break;
     }
-    if (set[w].stamp < victim->stamp) victim = &set[w];
+    if (stamp(set + w) < stamp(victim)) victim = set + w;
   }
-  evict(now, *victim);
-  victim->tag1 = line + 1;
-  return *victim;
+  evict(now, victim);
+  tag(victim) = line + 1;
+  return victim;
 }
 
 void CacheLevel::sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {
@@ -283,8 +283,7 @@ Cycle CacheLevel::fetch(Cycle at, uint64_t line, uint32_t mask, Surface s) {
   return done;
 }
 
-void CacheLevel::classify(uint64_t line, uint32_t sectors, bool missed) {
-  if (!classes_) return;
+void CacheLevel::classifyMiss(uint64_t line, uint32_t sectors, bool missed) {
   const MissClassifier::Kind k = classes_->access(line, sectors);
   if (!missed) return;
   switch (k) {
@@ -306,18 +305,19 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     uint32_t any, whole;
     sectorsOf(line_addr, addr, bytes, any, whole);
     unsigned slice;
-    Line* const set = setOfLine(line, slice);
+    const size_t set = setOfLine(line, slice);
     Cycle moved;
     const Cycle start = bookPort(slice, now, uint32_t(e - b), moved);
     const Cycle after_lookup = start + cfg_.hit_latency;
     ++stats_.accesses[si];
-    Line* l = find(set, line);
+    size_t way = find(set, line);
+    Line* l = way != kNoWay ? &record(way) : nullptr;
     if (!write) {
       const uint32_t missing = l ? any & ~l->valid : any;
       classify(line, any, missing != 0);
       if (missing == 0) {
         ++stats_.hits[si];
-        l->stamp = ++stamp_;
+        touchLru(way);
         done = std::max({done, after_lookup, moved, l->ready});
         continue;
       }
@@ -328,12 +328,13 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       done = std::max({done, after_lookup, moved, got});
       if (!l && cfg_.victim_only) continue;
       if (!l) {
-        l = &allocate(start, set, line);
+        way = allocate(start, set, line);
+        l = &record(way);
         l->surface = s;
       }
       l->valid |= missing;
       l->ready = std::max(l->ready, got);
-      l->stamp = ++stamp_;
+      touchLru(way);
       continue;
     }
     // Write (a write-back from above, or a surface write): write-allocate;
@@ -350,13 +351,16 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       stats_.writeback_bytes[si] += e - b;
       continue;
     }
-    if (!l) l = &allocate(start, set, line);
+    if (!l) {
+      way = allocate(start, set, line);
+      l = &record(way);
+    }
     const uint32_t partial = any & ~whole & ~l->valid;
     if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
     l->valid |= any;
     l->dirty |= any;
     l->surface = s;
-    l->stamp = ++stamp_;
+    touchLru(way);
   }
   return done;
 }
@@ -384,12 +388,12 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     uint32_t any, whole;
     sectorsOf(line_addr, a, sector_bytes, any, whole);
     unsigned slice;
-    Line* const set = setOfLine(line, slice);
+    const size_t set = setOfLine(line, slice);
     Cycle moved;
     const Cycle start = bookPort(slice, now, sector_bytes, moved);
     stats_.write_bytes[si] += sector_bytes;
-    Line* l = find(set, line);
-    if (!l) {
+    size_t way = find(set, line);
+    if (way == kNoWay) {
       if (whole == 0) {
         // Covers no whole sector of ours: dirty bytes go on below, clean ones are dropped.
         if (is_dirty) {
@@ -398,9 +402,10 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
         }
         continue;
       }
-      l = &allocate(start, set, line);
-      l->surface = s;
+      way = allocate(start, set, line);
+      record(way).surface = s;
     }
+    Line* const l = &record(way);
     if (classes_) {
       if (has_pending && line != pending_line) flush();
       pending_line = line;
@@ -416,7 +421,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
         stats_.writeback_bytes[si] += sector_bytes;
       }
     }
-    l->stamp = ++stamp_;
+    touchLru(way);
   }
   if (classes_) flush();
 }
@@ -425,13 +430,14 @@ void CacheLevel::dirtyRanges(std::vector<DirtyRange>& out) const {
   for (size_t word = 0; word < set_used_.size(); ++word)
     for (uint64_t bits = set_used_[word]; bits != 0; bits &= bits - 1) {
       const size_t set = word * 64 + size_t(std::countr_zero(bits));
-      for (unsigned w = 0; w < cfg_.ways; ++w) dirtyRuns(lines_[set * cfg_.ways + w], out);
+      for (unsigned w = 0; w < cfg_.ways; ++w) dirtyRuns((set << way_shift_) + w, out);
     }
 }
 
-void CacheLevel::dirtyRuns(const Line& l, std::vector<DirtyRange>& out) const {
-  if (l.tag1 == 0) return;
-  const uint64_t addr = (l.tag1 - 1) * cfg_.line_bytes;
+void CacheLevel::dirtyRuns(size_t way, std::vector<DirtyRange>& out) const {
+  if (tag(way) == 0) return;
+  const Line& l = record(way);
+  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
   forEachRun(l.dirty, [&](uint32_t s, uint32_t e) {
     out.push_back({addr + uint64_t(s) * sector_bytes_, (e - s) * sector_bytes_, l.surface});
   });

@@ -108,26 +108,46 @@ class CacheLevel final : public MemoryPort {
   bool resident(uint64_t addr) const;  // the line holding addr is in the cache (any sector)
 
  private:
-  // All zero = an invalid line, so the tag store can be allocated zeroed by
-  // the system (calloc): the pages of sets never used are never touched (a
+  // A way's state apart from its tag and LRU stamp. A set is one block of
+  // the tag store: its ways' tags, then their stamps, then these records, so
+  // a lookup compares the set's tags, 8 B per way (a 16-way set of a 128 MB
+  // level is 2 host cache lines instead of the 10 of whole records: the l3's
+  // lookups were most of the engines' time, bench/RESULTS-timing.md session
+  // 17), while a set still occupies one stretch of memory (three arrays
+  // touched a page each per set: +1 MB of resident memory on a 1024x512
+  // frame). All zero = an invalid way, so the store can be allocated zeroed
+  // by the system (calloc): the pages of sets never used are never touched (a
   // 128 MB level has 2 M lines; a frame uses a fraction of them).
   struct Line {
-    uint64_t tag1 = 0;      // line number (address / line_bytes) + 1; 0 = invalid
-    uint64_t stamp = 0;     // LRU
-    Cycle ready = 0;        // its last fill's data is there
+    Cycle ready = 0;  // its last fill's data is there
     uint32_t valid = 0, dirty = 0;
     Surface surface = Surface::BlendArrays;  // of its last writer (write-backs count by it)
   };
+  static constexpr size_t kNoWay = ~size_t(0);
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
-  uint32_t setIndex(uint64_t line) const;          // the line's set inside its slice
-  Line* setOfLine(uint64_t line, unsigned& slice);  // the ways of the line's set, and its slice
-  // The way holding `line` in its set, or null.
-  Line* find(Line* set, uint64_t line);
+  // A way is named by (set number << way_shift_) + way in the set; a set by
+  // its way 0.
+  uint32_t setIndex(uint64_t line) const;            // the line's set inside its slice
+  size_t setOfLine(uint64_t line, unsigned& slice) const;  // the line's set (its way 0), and its slice
+  uint64_t* tagsOf(size_t way) const {  // the tags of the way's set (then its stamps, then its records)
+    return reinterpret_cast<uint64_t*>(store_.get() + (way >> way_shift_) * block_bytes_);
+  }
+  uint64_t& tag(size_t way) const { return tagsOf(way)[way & way_mask_]; }  // line number + 1; 0 = invalid
+  uint64_t& stamp(size_t way) const { return tagsOf(way)[cfg_.ways + (way & way_mask_)]; }  // LRU: larger = more recent
+  Line& record(size_t way) const { return reinterpret_cast<Line*>(tagsOf(way) + 2 * size_t(cfg_.ways))[way & way_mask_]; }
+  // The way holding `line` in the set `set`, or kNoWay.
+  size_t find(size_t set, uint64_t line) const {
+    const uint64_t* const t = tagsOf(set);
+    for (unsigned w = 0; w < cfg_.ways; ++w)
+      if (t[w] == line + 1) return set + w;
+    return kNoWay;
+  }
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
-  Line& allocate(Cycle now, Line* set, uint64_t line);
-  void evict(Cycle now, Line& l);
+  size_t allocate(Cycle now, size_t set, uint64_t line);
+  void evict(Cycle now, size_t way);
+  void touchLru(size_t way) { stamp(way) = ++stamp_; }
   // Port booking: the slice's port moves `bytes` from `now` on, in the
   // earliest capacity free (PortCalendar); returns the cycle the transfer
   // starts, `end` the cycle it is done.
@@ -142,8 +162,11 @@ class CacheLevel final : public MemoryPort {
   // Reads the sectors `mask` of `line` from the level below (a run per
   // contiguous group); returns their completion.
   Cycle fetch(Cycle at, uint64_t line, uint32_t mask, Surface s);
-  void classify(uint64_t line, uint32_t sectors, bool missed);
-  void dirtyRuns(const Line& l, std::vector<DirtyRange>& out) const;  // a line's dirty sectors, in runs
+  void classify(uint64_t line, uint32_t sectors, bool missed) {  // inline: off by default, a test per line
+    if (classes_) classifyMiss(line, sectors, missed);
+  }
+  void classifyMiss(uint64_t line, uint32_t sectors, bool missed);
+  void dirtyRuns(size_t way, std::vector<DirtyRange>& out) const;  // a way's dirty sectors, in runs
 
   std::string name_;
   SharedCacheConfig cfg_;
@@ -153,7 +176,11 @@ class CacheLevel final : public MemoryPort {
   unsigned line_shift_ = 0;  // log2(line_bytes)
   int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
   bool sets_pow2_ = false;
-  std::unique_ptr<Line[], FreeDeleter> lines_;  // slice-major: (slice x sets + set) x ways + way; calloc'd
+  // The tag store: a block of block_bytes_ per set, slice-major (slice x sets + set); calloc'd.
+  std::unique_ptr<unsigned char[], FreeDeleter> store_;
+  size_t block_bytes_ = 0;  // ways x (tag + stamp + Line)
+  unsigned way_shift_ = 0;  // log2 of ways rounded up to a power of two
+  size_t way_mask_ = 0;
   size_t line_count_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice

@@ -24,24 +24,34 @@ uint32_t PortCalendar::used(Cycle c) const {
   return used_[c & mask_];
 }
 
+void PortCalendar::clearRange(size_t first, size_t n) {
+  if (n == 0) return;
+  std::fill_n(used_.begin() + ptrdiff_t(first), n, 0u);
+  // The full bits of slots [first, first + n): a word at a time.
+  for (size_t i = first, end = first + n; i < end;) {
+    const size_t bit = i & 63, take = std::min<size_t>(64 - bit, end - i);
+    const uint64_t bits = take == 64 ? ~uint64_t(0) : ((uint64_t(1) << take) - 1) << bit;
+    full_[i >> 6] &= ~bits;
+    i += take;
+  }
+}
+
 void PortCalendar::advanceBase(Cycle base) {
-  if (base <= base_) return;
   // The cycles [base_, base) leave the ring: their slots become free for the
-  // cycles one ring further on.
+  // cycles one ring further on (cleared in at most two ranges of the ring:
+  // a retire per fragment must not cost a step per cycle).
   if (base - base_ > mask_) {
     std::fill(used_.begin(), used_.end(), 0);
     std::fill(full_.begin(), full_.end(), 0);
   } else {
-    for (Cycle c = base_; c < base; ++c) {
-      used_[c & mask_] = 0;
-      full_[(c & mask_) >> 6] &= ~(uint64_t(1) << (c & 63));
-    }
+    const size_t first = size_t(base_ & mask_), n = size_t(base - base_), head = std::min(n, used_.size() - first);
+    clearRange(first, head);
+    clearRange(0, n - head);
   }
   base_ = base;
 }
 
-void PortCalendar::reserve(Cycle last) {
-  if (last <= base_ + mask_) return;
+void PortCalendar::grow(Cycle last) {
   // Grow the ring (doubling) so that it covers [base_, last]; lay the
   // bookings out again at their cycles.
   size_t size = used_.size();
@@ -61,7 +71,7 @@ void PortCalendar::reserve(Cycle last) {
 void PortCalendar::book(Cycle now, uint32_t bytes, Cycle& start, Cycle& end) {
   if (now > latest_) {
     latest_ = now;
-    if (lookback_ != 0 && latest_ > lookback_) advanceBase(latest_ - lookback_);
+    if (lookback_ != 0 && latest_ > lookback_ && latest_ - lookback_ > base_) advanceBase(latest_ - lookback_);
   }
   Cycle c = std::max(now, base_);
   uint64_t need = (uint64_t(bytes) * parts_per_byte_ + 0xFFFF) >> 16;  // parts of a cycle

@@ -17,6 +17,7 @@
 // the ring's oldest cycle. With `lookback` 0 only retireBefore moves the ring.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -35,12 +36,18 @@ class PortCalendar {
   // No request will come before cycle c: the ring may drop the cycles before
   // it (a caller that knows its requests' floor; with lookback 0 the only way
   // the ring moves on).
-  void retireBefore(Cycle c) { advanceBase(c); }
+  void retireBefore(Cycle c) {
+    if (c > base_) advanceBase(c);
+  }
 
  private:
   static constexpr uint32_t kFull = 1u << 16;  // one cycle of the port
-  void reserve(Cycle last);                    // the ring covers up to `last`
-  void advanceBase(Cycle base);
+  void reserve(Cycle last) {  // the ring covers up to `last` (inline: a test per booked cycle)
+    if (last > base_ + mask_) grow(last);
+  }
+  void grow(Cycle last);
+  void advanceBase(Cycle base);  // base > base_
+  void clearRange(std::size_t first, std::size_t n);  // the ring's slots [first, first + n), no wrap
   uint32_t& slot(Cycle c) { return used_[c & mask_]; }
   bool full(Cycle c) const { return (full_[(c & mask_) >> 6] >> (c & 63)) & 1; }
   void setFull(Cycle c) { full_[(c & mask_) >> 6] |= uint64_t(1) << (c & 63); }

@@ -25,18 +25,13 @@ std::string fmt_prefix(const std::string& file, uint64_t byte_offset, const std:
 
 // The audit's 64x48 glass trace (no opaque draws: every record is first read
 // by the SystemC threads in timing mode).
-class CliRunErrors : public ::testing::Test {
+struct CliRunErrorsTrace {
+  static constexpr const char* kFolder = "cli_run_errors";
+  static constexpr const char* kFile = "glass.oitt";
+  static constexpr const char* kGen = "gen glass --width 64 --height 48";
+};
+class CliRunErrors : public GeneratedTraceSuite<CliRunErrorsTrace> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir("cli_run_errors");
-    trace_ = dir_->file("glass.oitt");
-    CliResult r = runOitsim("gen glass --width 64 --height 48 -o " + trace_);
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-  }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
   // The glass trace with `size` bytes at `field_offset` of record `record` replaced.
   static std::string patched(const std::string& name, uint64_t record, size_t field_offset, const void* value,
                              size_t size, uint64_t* byte_offset = nullptr) {
@@ -51,11 +46,7 @@ class CliRunErrors : public ::testing::Test {
     writeText(path, bytes);
     return path;
   }
-  static TempDir* dir_;
-  static std::string trace_;
 };
-TempDir* CliRunErrors::dir_ = nullptr;
-std::string CliRunErrors::trace_;
 
 TEST_F(CliRunErrors, UnwritableVcdPathFailsNamingTheOptionBeforeTheSimulation) {
   const std::string out = dir_->file("vcd_out");

@@ -15,23 +15,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class CliRunSeeds : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new TempDir("cli_run_seeds");
-    small_ = dir_->file("glass.oitt");
-    CliResult r = runOitsim("gen glass --width 64 --height 48 -o " + small_);
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-  }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
-  static TempDir* dir_;
-  static std::string small_;
+// The audit's 64x48 glass trace, shared by the tests of this file.
+struct CliRunSeedsTrace {
+  static constexpr const char* kFolder = "cli_run_seeds";
+  static constexpr const char* kFile = "glass.oitt";
+  static constexpr const char* kGen = "gen glass --width 64 --height 48";
 };
-TempDir* CliRunSeeds::dir_ = nullptr;
-std::string CliRunSeeds::small_;
+class CliRunSeeds : public GeneratedTraceSuite<CliRunSeedsTrace> {};
 
 TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
   const std::string out = dir_->file("bad");
@@ -60,16 +50,16 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
   };
   for (const auto& [options, message] : cases) {
     SCOPED_TRACE(options);
-    CliResult r = runOitsim("run -q -t " + small_ + " -o " + out + " " + options);
+    CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " " + options);
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_EQ(r.output, "oitsim: error: " + message + "\n");
     EXPECT_FALSE(fs::exists(out));
   }
   // The parent keeps every seed's image: more seeds than memory holds are refused up front.
-  CliResult r = runOitsim("run -q -t " + small_ + " -o " + out + " --seeds 4000000000");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --seeds 4000000000");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   // 4e9 x (12 B image + 3 B sRGB8 codes) x 3072 pixels: about 150,000 GiB.
-  EXPECT_EQ(r.output.rfind("oitsim: error: " + small_ + ": a 64 x 48 frame with mlab and 4000000000 seeds' images "
+  EXPECT_EQ(r.output.rfind("oitsim: error: " + trace_ + ": a 64 x 48 frame with mlab and 4000000000 seeds' images "
                            "needs about ", 0),
             0u)
       << r.output;
@@ -81,8 +71,8 @@ TEST_F(CliRunSeeds, BadOrderingSettingsAreOneLineAndWriteNothing) {
 // image.flicker beside the usual files, seed 0's run being the main report.
 TEST_F(CliRunSeeds, SeedsWriteFlickerBesideTheMainRun) {
   const std::string one = dir_->file("one"), three = dir_->file("three");
-  ASSERT_EQ(runOitsim("run -q -t " + small_ + " -o " + one + " --set lock.mode=unordered --set input.seed=5").exit_code, 0);
-  CliResult r = runOitsim("run -q -t " + small_ + " -o " + three + " --seeds 3 --set lock.mode=unordered --set input.seed=5");
+  ASSERT_EQ(runOitsim("run -q -t " + trace_ + " -o " + one + " --set lock.mode=unordered --set input.seed=5").exit_code, 0);
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + three + " --seeds 3 --set lock.mode=unordered --set input.seed=5");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* f : {"image.png", "image.pfm", "reference.pfm", "diff.png", "flicker.png", "report.json"})
     EXPECT_TRUE(fs::exists(three + "/" + f)) << f;
@@ -105,9 +95,9 @@ TEST_F(CliRunSeeds, SeedsWriteFlickerBesideTheMainRun) {
 
   // Functional and ordered runs keep the submission order.
   const std::string fn = dir_->file("fn");
-  ASSERT_EQ(runOitsim("run -q --mode functional -t " + small_ + " -o " + fn).exit_code, 0);
+  ASSERT_EQ(runOitsim("run -q --mode functional -t " + trace_ + " -o " + fn).exit_code, 0);
   EXPECT_EQ(readJson(fn + "/report.json")["image"]["order"], "submission");
-  ASSERT_EQ(runOitsim("run -q -t " + small_ + " -o " + fn + " --set lock.mode=none").exit_code, 0);
+  ASSERT_EQ(runOitsim("run -q -t " + trace_ + " -o " + fn + " --set lock.mode=none").exit_code, 0);
   EXPECT_EQ(readJson(fn + "/report.json")["image"]["order"], "race");
 }
 
@@ -115,7 +105,7 @@ TEST_F(CliRunSeeds, SeedsWriteFlickerBesideTheMainRun) {
 // axes): one point per mode, each with its image.order and lost updates.
 TEST_F(CliRunSeeds, LockModeIsASweepAxis) {
   const std::string spec = dir_->file("modes.json"), out = dir_->file("modes_sweep");
-  writeText(spec, R"({"traces": [")" + small_ + R"("], "base": {"algo": "alpha", "format": "rgba8t8z32"},
+  writeText(spec, R"({"traces": [")" + trace_ + R"("], "base": {"algo": "alpha", "format": "rgba8t8z32"},
                       "axes": {"lock.mode": ["ordered", "unordered", "none"]}})");
   CliResult r = runOitsim("sweep " + spec + " --out " + out + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -180,6 +180,17 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
         EXPECT_LT(faster, 0.01) << sc.name << ": " << why(r) << " against " << why(ref);
         continue;
       }
+      // The third exception (issue 21, the approximate engine's in-order early
+      // depth): the same ROP cache in 4 ways instead of 8 (twice the sets)
+      // missed less on particles over the wall (18,074 against 18,167 misses)
+      // and the approximate engine's frame came out 0.63 % faster (the cycle
+      // engine's under 0.5 %): fewer ways with more sets is not always worse
+      // for LRU. Only with fewer ROP-cache misses, and by under 1 %.
+      if (path == "cache.ways" && faster > 0.005) {
+        EXPECT_LT(r.stats["cache"]["misses"].get<double>(), ref.stats["cache"]["misses"].get<double>()) << sc.name;
+        EXPECT_LT(faster, 0.01) << sc.name << ": " << why(r) << " against " << why(ref);
+        continue;
+      }
       EXPECT_GE(cycles, base_cycles * 0.995)
           << sc.name << ": " << path << " = " << value << " made the frame " << 100.0 * (1 - cycles / base_cycles)
           << " % faster (" << cycles << " against " << base_cycles << " cycles; " << why(r) << " against "

@@ -2,26 +2,16 @@
 // a trace several times the budget is streamed batch by batch while the
 // resident set size is sampled after every batch.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdio>
+#include <algorithm>
 #include <filesystem>
 
 #include "test_format_helpers.hpp"
+#include "traces/ResidentMemory.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::test {
 namespace {
-
-// Resident set size in bytes (file-backed mapped pages included).
-uint64_t residentBytes() {
-  unsigned long size = 0, resident = 0;
-  FILE* f = std::fopen("/proc/self/statm", "r");
-  if (!f) return 0;
-  const int n = std::fscanf(f, "%lu %lu", &size, &resident);
-  std::fclose(f);
-  return n == 2 ? resident * static_cast<uint64_t>(::sysconf(_SC_PAGESIZE)) : 0;
-}
 
 constexpr uint32_t kW = 1920, kH = 1080;
 

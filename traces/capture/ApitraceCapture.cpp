@@ -81,8 +81,13 @@ std::string tail(const std::string& text, size_t lines) {
 }
 
 std::string readFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
+  std::ifstream f(path, std::ios::binary | std::ios::ate);
+  if (!f) return {};
+  std::string s(static_cast<size_t>(f.tellg()), '\0');
+  f.seekg(0);
+  f.read(s.data(), static_cast<std::streamsize>(s.size()));
+  s.resize(static_cast<size_t>(f.gcount()));
+  return s;
 }
 
 // A private X server for glretrace (which presents through GLX even with
@@ -146,9 +151,19 @@ int runRetracer(const ApitraceOptions& o, const std::string& retracer, const std
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e) {
     const std::string_view v(*e);
-    if (v.starts_with("LD_LIBRARY_PATH=") || v.starts_with("DISPLAY=") || v.starts_with("OITSIM_")) continue;
+    if (v.starts_with("LD_LIBRARY_PATH=") || v.starts_with("DISPLAY=") || v.starts_with("OITSIM_") ||
+        v.starts_with("GLIBC_TUNABLES="))
+      continue;
     env.emplace_back(v);
   }
+  // llvmpipe zero-fills every buffer it allocates, the record buffer is the GL's
+  // largest storage block (128 MiB on Mesa 22), and page faults are dear in a VM:
+  // with 4 KiB pages they were half the retracer's CPU time on the glmark2 frame
+  // (bench/RESULTS-capture-apitrace.md). malloc asking for transparent huge pages
+  // (madvise) cuts them 512-fold; where THP is off it changes nothing.
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  env.push_back(std::string("GLIBC_TUNABLES=") + (tunables && *tunables ? std::string(tunables) + ":" : "") +
+                "glibc.malloc.hugetlb=1");
   const char* lib_path = std::getenv("LD_LIBRARY_PATH");
   env.push_back("LD_LIBRARY_PATH=" + gl_dir + (lib_path && *lib_path ? std::string(":") + lib_path : ""));
   env.push_back("DISPLAY=" + display);
@@ -247,8 +262,12 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   if (d.instanced) ++f.multi_draws;
   if (!info.state->recorded()) return;  // listed, not modelled: its fragments stay out
   const size_t first = f.fragments.size();
-  f.fragments.resize(first + d.records);
-  for (uint64_t i = 0; i < d.records; ++i) toFragment(recs[i], d, f, f.fragments[first + i]);
+  f.fragments.reserve(first + d.records);  // not resize: its zero fill was 6 % of the capture's CPU time
+  for (uint64_t i = 0; i < d.records; ++i) {
+    Fragment frag;
+    toFragment(recs[i], d, f, frag);
+    f.fragments.push_back(frag);
+  }
   // Threads append in any order. API order within a draw: primitive, then pixel
   // rows bottom-up, then x (as oitsim gen and the mesh capture emit). Instances and
   // sub-draws restart primitive ids: their fragments at one pixel are then ordered by

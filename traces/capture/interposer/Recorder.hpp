@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -89,6 +90,8 @@ class Recorder {
   void restoreStorage(GLuint index, const SavedBinding& s);
   void zeroBuffer(GLuint buffer, GLsizeiptr bytes);
   void readBuffer(GLuint buffer, GLintptr offset, GLsizeiptr bytes, void* out);
+  // Maps [offset, offset + bytes) of `buffer` for reading and hands the pointer to `use`.
+  void mapBuffer(GLuint buffer, GLintptr offset, GLsizeiptr bytes, const std::function<void(const void*)>& use);
   bool drawableSize(uint32_t& w, uint32_t& h) const;
   void targetSize(GLint fb, GLenum attachment, uint32_t& w, uint32_t& h) const;
   void write(uint32_t tag, const void* payload, uint32_t bytes, const void* extra = nullptr, uint64_t extra_bytes = 0);
@@ -108,7 +111,6 @@ class Recorder {
   GLenum verify_depth_format_ = 0;
   uint32_t frame_w_ = 0, frame_h_ = 0, verify_w_ = 0, verify_h_ = 0;
   bool verify_used_ = false;  // a verify drawing happened in this frame (target cleared)
-  std::vector<stream::GpuRecord> records_;
 };
 
 }  // namespace oit::capture::interposer
