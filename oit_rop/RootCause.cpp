@@ -135,14 +135,12 @@ uint64_t RootCauseAccount::total() const { return std::accumulate(cycles_.begin(
 void DelayShares::addWait(Cycle from, Cycle to, const WaitSplit& w) {
   if (to <= from) return;
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
-  uint64_t lat, bw;
-  splitLatency(l - from, from, l, bus_, lat, bw);
-  delay_[size_t(RootCause::DramLatency)] += lat;
+  addUnloaded(from, l, l - from);
   const QueueSplit q = queueSplit(w, l, e);
   delay_[size_t(RootCause::DramRefresh)] += q.refresh;
   delay_[size_t(RootCause::DramBankConflict)] += q.bank;
   delay_[size_t(RootCause::DramTurnaround)] += q.turnaround;
-  delay_[size_t(RootCause::DramBandwidth)] += bw + q.bandwidth;
+  delay_[size_t(RootCause::DramBandwidth)] += q.bandwidth;
   delay_[size_t(w.rest)] += to - e;
 }
 
@@ -153,51 +151,93 @@ void DelayShares::addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w) 
     return;
   }
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
-  const double busy = bus_ ? bus_(from, l) : 0.0;
   const uint64_t span = to - from, lat_all = n * (l - from) / span;
-  const uint64_t lat = uint64_t(double(lat_all) * (1.0 - busy) + 0.5);
+  addUnloaded(from, l, lat_all);
   const QueueSplit q = queueSplit(w, l, e);
   const uint64_t refresh = n * q.refresh / span, bank = n * q.bank / span, turn = n * q.turnaround / span;
-  const uint64_t bw = (lat_all - lat) + n * q.bandwidth / span;
+  const uint64_t bw = n * q.bandwidth / span;
   delay_[size_t(RootCause::DramRefresh)] += refresh;
   delay_[size_t(RootCause::DramBankConflict)] += bank;
   delay_[size_t(RootCause::DramTurnaround)] += turn;
   delay_[size_t(RootCause::DramBandwidth)] += bw;
-  delay_[size_t(RootCause::DramLatency)] += lat;
-  delay_[size_t(w.rest)] += n - bw - lat - refresh - bank - turn;
+  delay_[size_t(w.rest)] += n - lat_all - bw - refresh - bank - turn;
+}
+
+void DelayShares::addUnloaded(Cycle from, Cycle to, uint64_t n) {
+  if (n == 0) return;
+  unloaded_ += n;
+  spans_.push_back({from, to, n});
+  open_last_to_ = std::max(open_last_to_, to);
 }
 
 void DelayShares::chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback) {
   if (n == 0) return;
-  const uint64_t sum = std::accumulate(delay_.begin(), delay_.end(), uint64_t(0));
+  const uint64_t sum = std::accumulate(delay_.begin(), delay_.end(), uint64_t(0)) + unloaded_;
   if (sum == 0) {
     acc.add(fallback, n);
     return;
   }
   // Whole shares first, the cycles left to the largest remainders (ties: the
-  // first cause), so the shares add up to n exactly.
-  std::array<uint64_t, kRootCauseCount> rem{};
+  // first cause; the unloaded accesses, kept apart, last), so the shares add
+  // up to n exactly.
+  constexpr unsigned kUnloaded = kRootCauseCount;
+  std::array<uint64_t, kRootCauseCount + 1> rem{}, got{};
   uint64_t given = 0;
-  for (unsigned i = 0; i < kRootCauseCount; ++i) {
-    if (delay_[i] == 0) continue;  // no share, no remainder
+  for (unsigned i = 0; i <= kRootCauseCount; ++i) {
+    const uint64_t d = i == kUnloaded ? unloaded_ : delay_[i];
+    if (d == 0) continue;  // no share, no remainder
     uint64_t whole, x64;
-    if (!__builtin_mul_overflow(n, delay_[i], &x64)) {  // the common case: no 128-bit division
+    if (!__builtin_mul_overflow(n, d, &x64)) {  // the common case: no 128-bit division
       whole = x64 / sum;
       rem[i] = x64 % sum;
     } else {
-      const U128 x = U128(n) * delay_[i];
+      const U128 x = U128(n) * d;
       whole = uint64_t(x / sum);
       rem[i] = uint64_t(x % sum);
     }
-    acc.add(RootCause(i), whole);
+    got[i] = whole;
     given += whole;
   }
   for (; given < n; ++given) {
     const size_t i = size_t(std::max_element(rem.begin(), rem.end()) - rem.begin());
-    acc.add(RootCause(i), 1);
+    ++got[i];
     rem[i] = 0;
   }
+  for (unsigned i = 0; i < kRootCauseCount; ++i) acc.add(RootCause(i), got[i]);
+  const uint64_t end = spans_base_ + spans_.size();
+  if (got[kUnloaded]) {
+    charges_.push_back({got[kUnloaded], open_begin_, end, open_last_to_});
+  } else if (charges_.empty()) {  // no charge holds these spans
+    spans_.clear();
+    spans_base_ = end;
+  }
+  open_begin_ = end;
+  open_last_to_ = 0;
   delay_.fill(0);
+  unloaded_ = 0;
+}
+
+void DelayShares::settle(RootCauseAccount& acc, Cycle before) {
+  while (!charges_.empty() && charges_.front().last_to <= before) {
+    const Charge c = charges_.front();
+    charges_.pop_front();
+    // The charge's cycles in the proportions of its spans' latency and bandwidth.
+    double all = 0.0, busy = 0.0;
+    for (uint64_t i = c.begin; i < c.end; ++i) {
+      const Span& s = spans_[i - spans_base_];
+      all += double(s.n);
+      if (bus_) busy += double(s.n) * bus_(s.from, s.to);
+    }
+    const uint64_t bw = all > 0 ? std::min<uint64_t>(c.cycles, uint64_t(double(c.cycles) * busy / all + 0.5)) : 0;
+    acc.add(RootCause::DramBandwidth, bw);
+    acc.add(RootCause::DramLatency, c.cycles - bw);
+    // Spans before the next charge's (or the open ones) are done with.
+    const uint64_t keep = charges_.empty() ? open_begin_ : charges_.front().begin;
+    while (spans_base_ < keep) {
+      spans_.pop_front();
+      ++spans_base_;
+    }
+  }
 }
 
 }  // namespace oit::rop

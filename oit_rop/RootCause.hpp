@@ -11,6 +11,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 
 #include "oit_rop/Types.hpp"
@@ -133,6 +134,14 @@ class RootCauseAccount {
 // time (a full scoreboard, a pass's drain): the delays the fragments in
 // flight met since the last such wait, by cause, share it out in proportion
 // (largest remainders; all zero: `fallback`).
+//
+// A wait's unloaded access splits into latency and bandwidth by the bus time
+// booked over it (splitLatency), and the approximate engine books requests
+// in issue order: when a wait is charged, later fragments' bookings (a write
+// batch drained after it) may still fill its span (evaluated then, the spans
+// of a DRAM-bound frame looked 73 % busy; with every booking made, 98 %).
+// So the cycles the unloaded accesses take are kept with their spans and
+// split once the bookings over them are final (settle(), finish()).
 class DelayShares {
  public:
   void setBusShare(BusShareFn f) { bus_ = std::move(f); }
@@ -141,12 +150,34 @@ class DelayShares {
   // `n` cycles in the proportions of w's parts over [from, to) (a hit that
   // waits for another fragment's fill: that fill's proportions).
   void addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w);
-  // Charges `n` cycles to `acc` in proportion to the delays gathered, then forgets them.
+  // Charges `n` cycles to `acc` in proportion to the delays gathered, then
+  // forgets them (the unloaded accesses' share: when settled).
   void chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback);
+  // Splits the charged unloaded accesses whose spans end by `before` (no
+  // booking still to come lands before it) into latency and bandwidth.
+  void settle(RootCauseAccount& acc, Cycle before);
+  void finish(RootCauseAccount& acc) { settle(acc, ~Cycle(0)); }  // all of them (the phase's end)
 
  private:
+  // The unloaded accesses' cycles not yet split: `unloaded_` in total over
+  // the spans added since the last charge; each charge's share of them waits
+  // in a Charge over its spans [begin, end) (absolute indices into spans_).
+  struct Span {
+    Cycle from, to;
+    uint64_t n;
+  };
+  struct Charge {
+    uint64_t cycles, begin, end;
+    Cycle last_to;
+  };
+  void addUnloaded(Cycle from, Cycle to, uint64_t n);
   RootCauseAccount::Cycles delay_{};
+  uint64_t unloaded_ = 0;
   BusShareFn bus_;
+  std::deque<Span> spans_;
+  uint64_t spans_base_ = 0, open_begin_ = 0;  // spans_.front()'s index; the first not yet charged
+  Cycle open_last_to_ = 0;
+  std::deque<Charge> charges_;
 };
 
 }  // namespace oit::rop
