@@ -148,12 +148,19 @@ class MemorySystem {
   // data (ticks). A read may take a gap the bus left idle (DramBusGaps).
   template <bool Write>
   uint64_t bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest);
-  // The queueing of a run just placed (data start `xfer`, its column command
-  // at `column` by the bank's timing) by cause (RootCause.hpp,
-  // DramQueueParts); records the bus's idle stretch before it. Called before
-  // the channel's state is updated for the run.
-  DramQueueParts queueParts(Channel& c, uint64_t earliest, uint64_t arrive, uint64_t column, uint64_t xfer,
-                            bool refreshed, bool in_gap);
+  // Where a run was placed for its queueing by cause: from `earliest`, its
+  // column command at `column`, data at `xfer`; `refresh_wait` ticks the
+  // refresh moved it by, the bus idle for it over [refresh_from, refresh_to)
+  // (refresh_to 0: up to where the run could start).
+  struct RunPlace {
+    uint64_t earliest = 0, column = 0, xfer = 0;
+    uint64_t refresh_wait = 0, refresh_from = 0, refresh_to = 0;
+    bool refreshed = false;  // a refresh moved it or closed its row
+  };
+  // The queueing of a run placed as `at` (its data at `xfer` in the end) by
+  // cause (RootCause.hpp, DramQueueParts); records the bus's idle stretch
+  // before it. Called before the channel's state is updated for the run.
+  DramQueueParts queueParts(Channel& c, const RunPlace& at, uint64_t xfer, bool in_gap);
   // Queues a write run arriving at `arrive`; returns the tick it is accepted.
   uint64_t postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive);
   // Books channel ch's next batch of writes from `at` (`all`: every waiting one).
