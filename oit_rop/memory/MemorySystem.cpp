@@ -307,14 +307,22 @@ void MemorySystem::drainBatch(unsigned ch, uint64_t at, bool all) {
 Cycle MemorySystem::drainWrites(Cycle now) {
   const uint64_t at = uint64_t(now) << kTickShift;
   uint64_t done = at;
+  DramQueueParts queue;  // what the channel that finishes last waited for
   for (unsigned ch = 0; ch < channels_.size(); ++ch) {
-    if (!channels_[ch].writes.empty()) drainBatch(ch, at, true);
-    done = std::max(done, channels_[ch].last_write_end);
+    const bool drained = !channels_[ch].writes.empty();
+    if (drained) drainBatch(ch, at, true);
+    if (channels_[ch].last_write_end >= done) {
+      done = channels_[ch].last_write_end;
+      queue = drained ? channels_[ch].drain_queue : DramQueueParts{};
+    }
   }
   stats_.row_hits = hits_;
   stats_.row_misses = misses_;
   const Cycle completion = DramTimings::ceilCycles(done);
   stats_.last_completion = std::max(stats_.last_completion, completion);
+  // The probe: a wait for the drain is a write's (its data on the bus is
+  // bandwidth, its runs' bank, turnaround and refresh waits theirs).
+  if (done > at && completion >= probe_.done) probe_ = {completion, unloadedCycles(true), 0, queue};
   return completion;
 }
 
