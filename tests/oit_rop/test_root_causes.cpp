@@ -191,4 +191,65 @@ TEST(RootCauseAccount, DramQueueingSplitsByWhatTheControllerWaitedFor) {
   EXPECT_EQ(d.cycles(), b.cycles());
 }
 
+// A refresh is charged what it moved a run by (round configuration, refresh
+// windows [1000, 1100) on channel 0: tREFI 1000 ns, tRFC 100 ns at 1 ns a
+// cycle). A read of row 0 of bank 0 asked at 900: activate 940, data [962,
+// 966). A read of row 1 of bank 0 asked at 900 would precharge at 966 (the
+// first one's data), activate 977, column 988, data [999, 1003): it meets
+// the window, so it goes after it, on the bank the refresh closed: activate
+// 1100, column 1111, data [1122, 1126), done 1126. Its wait: 66 unloaded,
+// 160 of queueing: the refresh moved its data from 999 to 1122 (123); where
+// it would have gone, it waited 4 for the bus (the first read's data, from
+// 940 + tRCD + CL = 962 to 966) and 33 for its bank (966 to 999). (Charged
+// from arrival to the window's end, first, the refresh took all 160.)
+TEST(RootCauseAccount, RefreshIsChargedWhatItMovedTheRun) {
+  DramConfig c = roundDramConfig(1);
+  c.trefi_ns = 1000.0;
+  c.trfc_ns = 100.0;
+  MemorySystem m(c, kRoundMhz);
+  ASSERT_EQ(m.access(900, 0, 64, false, Surface::BlendArrays), 966u);
+  ASSERT_EQ(m.bankOf(8 * 8192), m.bankOf(0));
+  m.resetProbe();
+  ASSERT_EQ(m.access(900, 8 * 8192, 64, false, Surface::BlendArrays), 1126u);
+  const WaitSplit w = splitWait(900, 1126, m.probe());
+  EXPECT_EQ(w.latency_end, 966u);
+  EXPECT_EQ(w.refresh_end, 966u + 123);
+  EXPECT_EQ(w.bank_end, 966u + 123 + 33);
+  EXPECT_EQ(w.turn_end, w.bank_end);
+  EXPECT_EQ(w.queue_end, 1126u);
+  RootCauseAccount a;
+  a.setWait(900, w);
+  a.account(1126);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(a, RootCause::DramRefresh), 123u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 4u);
+}
+
+// The final drain is a wait like any other (round configuration): two
+// writes to rows 0 and 1 of bank 1 posted at 0 (accepted at 40), drained
+// at 40: row 0 activates at 40, data [62, 66); row 1 precharges at 66,
+// activates at 77, column 88, data [99, 103): done 103. The batch's parts:
+// its data on the bus, 2 x 4, and the second run's bank, 66 to 99: 33. A
+// wait from 40: the write's unloaded access, the controller's 40; 23 of
+// queueing, 33 / 41 of it the bank's: 18 (floor of 18.5), 5 bandwidth.
+// (Before issue 22 s4 all 63 were dram_bandwidth.)
+TEST(RootCauseAccount, TheFinalDrainIsSplitByWhatTheDramDid) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  ASSERT_EQ(m.bankOf(9 * 8192), m.bankOf(8192));
+  ASSERT_NE(m.rowOf(9 * 8192), m.rowOf(8192));
+  ASSERT_EQ(m.access(0, 8192, 64, true, Surface::BlendArrays), 40u);
+  ASSERT_EQ(m.access(0, 9 * 8192, 64, true, Surface::BlendArrays), 40u);
+  m.resetProbe();
+  ASSERT_EQ(m.drainWrites(40), 103u);
+  EXPECT_EQ(m.probe().done, 103u);
+  EXPECT_EQ(m.probe().unloaded, 40u);
+  RootCauseAccount a;
+  a.setWait(40, splitWait(40, 103, m.probe()));
+  a.account(103);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 40u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 18u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 5u);
+}
+
 }  // namespace
