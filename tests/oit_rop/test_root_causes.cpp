@@ -16,6 +16,23 @@ namespace {
 
 uint64_t at(const RootCauseAccount& a, RootCause c) { return a.cycles()[size_t(c)]; }
 
+// A wait's inner ends: the unloaded access, then refresh, bank, turnaround, bus.
+void expectEnds(const WaitSplit& w, Cycle latency, Cycle refresh, Cycle bank, Cycle turn, Cycle queue) {
+  EXPECT_EQ(w.latency_end, latency);
+  EXPECT_EQ(w.refresh_end, refresh);
+  EXPECT_EQ(w.bank_end, bank);
+  EXPECT_EQ(w.turn_end, turn);
+  EXPECT_EQ(w.queue_end, queue);
+}
+// The causes a wait from `from` to `to` is charged, accounted alone (no bus record: its
+// unloaded access all latency).
+RootCauseAccount chargedAlone(Cycle from, Cycle to, const WaitSplit& w) {
+  RootCauseAccount a;
+  a.setWait(from, w);
+  a.account(to);
+  return a;
+}
+
 // A wait from 4 to 20 whose DRAM unloaded access ends at 10 and queueing at
 // 15: 6 cycles of latency, 5 of bandwidth, 5 of the cache's own; then the
 // ALU from 20 to 30.
@@ -155,14 +172,8 @@ TEST(RootCauseAccount, DramQueueingSplitsByWhatTheControllerWaitedFor) {
   m.resetProbe();
   ASSERT_EQ(m.access(0, 8 * 8192, 64, false, Surface::BlendArrays), 103u);
   WaitSplit w = splitWait(0, 103, m.probe());
-  EXPECT_EQ(w.latency_end, 66u);
-  EXPECT_EQ(w.refresh_end, 66u);
-  EXPECT_EQ(w.bank_end, 99u);
-  EXPECT_EQ(w.turn_end, 99u);
-  EXPECT_EQ(w.queue_end, 103u);
-  RootCauseAccount a;
-  a.setWait(0, w);
-  a.account(103);
+  expectEnds(w, 66, 66, 99, 99, 103);
+  const RootCauseAccount a = chargedAlone(0, 103, w);
   EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
   EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
   EXPECT_EQ(at(a, RootCause::DramBandwidth), 4u);
@@ -174,9 +185,7 @@ TEST(RootCauseAccount, DramQueueingSplitsByWhatTheControllerWaitedFor) {
   n.resetProbe();
   ASSERT_EQ(n.access(0, 2 * 8192, 64, false, Surface::BlendArrays), 87u);
   w = splitWait(0, 87, n.probe());
-  RootCauseAccount b;
-  b.setWait(0, w);
-  b.account(87);
+  const RootCauseAccount b = chargedAlone(0, 87, w);
   EXPECT_EQ(at(b, RootCause::DramLatency), 66u);
   EXPECT_EQ(at(b, RootCause::DramTurnaround), 17u);
   EXPECT_EQ(at(b, RootCause::DramBandwidth), 4u);
@@ -212,14 +221,8 @@ TEST(RootCauseAccount, RefreshIsChargedWhatItMovedTheRun) {
   m.resetProbe();
   ASSERT_EQ(m.access(900, 8 * 8192, 64, false, Surface::BlendArrays), 1126u);
   const WaitSplit w = splitWait(900, 1126, m.probe());
-  EXPECT_EQ(w.latency_end, 966u);
-  EXPECT_EQ(w.refresh_end, 966u + 123);
-  EXPECT_EQ(w.bank_end, 966u + 123 + 33);
-  EXPECT_EQ(w.turn_end, w.bank_end);
-  EXPECT_EQ(w.queue_end, 1126u);
-  RootCauseAccount a;
-  a.setWait(900, w);
-  a.account(1126);
+  expectEnds(w, 966, 966 + 123, 966 + 123 + 33, 966 + 123 + 33, 1126);
+  const RootCauseAccount a = chargedAlone(900, 1126, w);
   EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
   EXPECT_EQ(at(a, RootCause::DramRefresh), 123u);
   EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
@@ -244,9 +247,7 @@ TEST(RootCauseAccount, TheFinalDrainIsSplitByWhatTheDramDid) {
   ASSERT_EQ(m.drainWrites(40), 103u);
   EXPECT_EQ(m.probe().done, 103u);
   EXPECT_EQ(m.probe().unloaded, 40u);
-  RootCauseAccount a;
-  a.setWait(40, splitWait(40, 103, m.probe()));
-  a.account(103);
+  const RootCauseAccount a = chargedAlone(40, 103, splitWait(40, 103, m.probe()));
   EXPECT_EQ(at(a, RootCause::DramLatency), 40u);
   EXPECT_EQ(at(a, RootCause::DramBankConflict), 18u);
   EXPECT_EQ(at(a, RootCause::DramBandwidth), 5u);
