@@ -8,6 +8,13 @@ namespace oit::rop {
 namespace {
 __extension__ typedef unsigned __int128 U128;  // n x delay can pass 2^64
 
+// floor(a x b / c) (c > 0), without a 128-bit division where a x b fits 64 bits.
+inline uint64_t mulDiv(uint64_t a, uint64_t b, uint64_t c) {
+  uint64_t ab;
+  if (!__builtin_mul_overflow(a, b, &ab)) return ab / c;
+  return uint64_t(U128(a) * b / c);
+}
+
 // The part [l, e) of a wait's DRAM queueing and transfer, by cause (the
 // WaitSplit's inner ends clamped to it).
 struct QueueSplit {
@@ -25,11 +32,11 @@ QueueSplit queueSplit(const WaitSplit& ws, Cycle l, Cycle e) {
   const WaitSplit w = withQueueEnds(ws);
   const Cycle q0 = std::clamp(w.latency_end, l, e), q1 = std::clamp(w.queue_end, q0, e);
   QueueSplit s;
-  if (q1 > q0) {
+  if (q1 > q0 && w.turn_end > w.latency_end) {  // (all of it the bus's: no division)
     const uint64_t len = q1 - q0, all = w.queue_end - w.latency_end;
-    s.refresh = uint64_t(U128(len) * (w.refresh_end - w.latency_end) / all);
-    s.bank = uint64_t(U128(len) * (w.bank_end - w.refresh_end) / all);
-    s.turnaround = uint64_t(U128(len) * (w.turn_end - w.bank_end) / all);
+    s.refresh = mulDiv(len, w.refresh_end - w.latency_end, all);
+    s.bank = mulDiv(len, w.bank_end - w.refresh_end, all);
+    s.turnaround = mulDiv(len, w.turn_end - w.bank_end, all);
   }
   s.bandwidth = (e - l) - s.refresh - s.bank - s.turnaround;
   return s;
@@ -75,7 +82,7 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest) 
     // The queueing in the controller's proportions (whole shares; the cycles
     // left over to the bus, all of them when the controller saw nothing).
     const uint64_t sum = d.queue.sum();
-    auto part = [&](uint64_t x) { return sum ? Cycle(U128(queue) * x / sum) : 0; };
+    auto part = [&](uint64_t x) { return sum ? Cycle(mulDiv(queue, x, sum)) : 0; };
     w.refresh_end = w.latency_end + part(d.queue.refresh);
     w.bank_end = w.refresh_end + part(d.queue.bank);
     w.turn_end = w.bank_end + part(d.queue.turnaround);
@@ -115,9 +122,9 @@ void RootCauseAccount::account(Cycle now) {
     const WaitSplit w = withQueueEnds(w_);
     if (w.queue_end > at && w.queue_end > w.latency_end) {
       const Cycle to = std::min(w.queue_end, now), len = to - at, all = w.queue_end - w.latency_end;
-      const uint64_t r = uint64_t(U128(len) * (w.refresh_end - w.latency_end) / all);
-      const uint64_t b = uint64_t(U128(len) * (w.bank_end - w.refresh_end) / all);
-      const uint64_t t = uint64_t(U128(len) * (w.turn_end - w.bank_end) / all);
+      const uint64_t r = mulDiv(len, w.refresh_end - w.latency_end, all);
+      const uint64_t b = mulDiv(len, w.bank_end - w.refresh_end, all);
+      const uint64_t t = mulDiv(len, w.turn_end - w.bank_end, all);
       cycles_[size_t(RootCause::DramRefresh)] += r;
       cycles_[size_t(RootCause::DramBankConflict)] += b;
       cycles_[size_t(RootCause::DramTurnaround)] += t;
