@@ -399,9 +399,14 @@ void RopPartition::resolvePhase() {
   }
   // The frame ends when the last posted write reached DRAM: the DRAM
   // controller writes what its write queues still hold (MEMORY.md).
+  // The root cause: the drain's own queueing by cause (its data on the bus
+  // is bandwidth; the controller's bank, turnaround and refresh waits
+  // theirs); past the drain, the posted writes still in flight.
   setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-  root_.set(now_, RootCause::DramBandwidth);  // the posted writes still queued
-  const Cycle end = std::max({now_, last_write_done_, memory_.drainWrites(now_)});
+  memory_.resetProbe();
+  const Cycle drained = memory_.drainWrites(now_);
+  const Cycle end = std::max({now_, last_write_done_, drained});
+  root_.setWait(now_, splitWait(now_, end, memory_.probe(), RootCause::DramBandwidth));
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);

@@ -40,6 +40,10 @@ void ApproximateEngine::run() {
   p.root_.account(p.now_);
   DelayShares shares;
   shares.setBusShare([&p](Cycle from, Cycle to) { return p.memory_.busShare(from, to); });
+  // A wait's span is split once the issues have passed its block of bus
+  // record and a quantum (other partitions book up to a quantum behind):
+  // requests booked later put their data after their own issue.
+  const Cycle settle_lag = (Cycle(1) << MemorySystem::kBusyBlockShift) + p.quantum_;
   Cycle charged = p.now_;  // root causes accounted up to here
   Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
   Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
@@ -140,6 +144,7 @@ void ApproximateEngine::run() {
       retireCalendars(p.now_);
       if (last_release > p.now_) p.advance(last_release, false);
       if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+      shares.finish(p.root_);
       charged = std::max(charged, p.now_);
       in = q.cursor();
       issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
@@ -181,6 +186,7 @@ void ApproximateEngine::run() {
       p.root_.add(RootCause::Alu, alu);
       p.root_.add(RootCause::Input, rate_end - charged - alu);
       shares.chargeTo(p.root_, issue - rate_end, RootCause::ScoreboardFull);
+      if (issue > settle_lag) shares.settle(p.root_, issue - settle_lag);
       charged = issue;
     }
     if (issue > p.now_) {
@@ -328,6 +334,7 @@ void ApproximateEngine::run() {
     ++fragments;
   }
   if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
+  shares.finish(p.root_);
   p.root_.skipTo(p.now_);
   // Shader busy until the last fragment left it; then every stage idle to the drain.
   tl[0].close(acc[0], last_finish, kBusy);

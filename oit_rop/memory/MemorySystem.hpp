@@ -133,6 +133,10 @@ class MemorySystem {
     uint64_t booked = 0;          // bursts booked so far (the scheduler window's clock)
     DramBusGaps gaps;
     DramWriteQueue writes;
+    DramQueueParts drain_queue;  // what the latest drained batch waited for (a full write queue's wait)
+    // Ticks the bus idled per 2^kBusyBlockShift cycles because the run after
+    // it waited for its bank, a turnaround, a refresh (queueParts).
+    std::array<std::vector<uint64_t>, 3> idle_blocks;
     explicit Channel(const DramConfig& c) : writes(c.write_queue, c.write_high, c.write_low) {}
   };
 
@@ -144,6 +148,19 @@ class MemorySystem {
   // data (ticks). A read may take a gap the bus left idle (DramBusGaps).
   template <bool Write>
   uint64_t bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t earliest);
+  // Where a run was placed for its queueing by cause: from `earliest`, its
+  // column command at `column`, data at `xfer`; `refresh_wait` ticks the
+  // refresh moved it by, the bus idle for it over [refresh_from, refresh_to)
+  // (refresh_to 0: up to where the run could start).
+  struct RunPlace {
+    uint64_t earliest = 0, column = 0, xfer = 0;
+    uint64_t refresh_wait = 0, refresh_from = 0, refresh_to = 0;
+    bool refreshed = false;  // a refresh moved it or closed its row
+  };
+  // The queueing of a run placed as `at` (its data at `xfer` in the end) by
+  // cause (RootCause.hpp, DramQueueParts); records the bus's idle stretch
+  // before it. Called before the channel's state is updated for the run.
+  DramQueueParts queueParts(Channel& c, const RunPlace& at, uint64_t xfer, bool in_gap);
   // Queues a write run arriving at `arrive`; returns the tick it is accepted.
   uint64_t postWrite(unsigned ch, unsigned bank_no, uint64_t row, uint64_t n, uint64_t arrive);
   // Books channel ch's next batch of writes from `at` (`all`: every waiting one).
@@ -161,6 +178,7 @@ class MemorySystem {
   uint64_t window_ = 0;  // DramBusGaps::Asker::window: queue_depth with FR-FCFS, 0 with FCFS
   MemoryStats stats_;
   DramProbe probe_;
+  DramQueueParts run_queue_;  // the latest bookRun's queueing by cause
   std::vector<uint64_t> busy_blocks_;  // bus ticks booked per 2^kBusyBlockShift cycles, all channels
   void addBusy(uint64_t from_tick, uint64_t len);
 };

@@ -25,7 +25,8 @@ def _phase_rank(name):
     return (1, int(name.rsplit(" ", 1)[1]) if name[-1].isdigit() else 0)
 # timing.root_cause_cycles keys, from the input to the memory (oit_rop/RootCause.hpp).
 ROOT_CAUSES = ["input", "input_starvation", "scoreboard_full", "lock_wait", "alu", "rop_cache_miss", "l2",
-               "dram_latency", "dram_bandwidth", "pipeline_latency", "atomic_wait", "list_walk", "sort"]
+               "dram_latency", "dram_bandwidth", "dram_bank_conflict", "dram_turnaround", "dram_refresh",
+               "pipeline_latency", "atomic_wait", "list_walk", "sort"]
 CAUSE_SHORT = {"lock_wait": "lock", "scoreboard_full": "scoreboard", "cache_miss_wait": "miss",
                "dram_bandwidth": "DRAM", "alu_busy": "ALU", "input_starved": "starved",
                "atomic_wait": "atomics", "list_walk": "list walk", "sort": "sort"}

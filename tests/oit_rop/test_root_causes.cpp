@@ -16,6 +16,23 @@ namespace {
 
 uint64_t at(const RootCauseAccount& a, RootCause c) { return a.cycles()[size_t(c)]; }
 
+// A wait's inner ends: the unloaded access, then refresh, bank, turnaround, bus.
+void expectEnds(const WaitSplit& w, Cycle latency, Cycle refresh, Cycle bank, Cycle turn, Cycle queue) {
+  EXPECT_EQ(w.latency_end, latency);
+  EXPECT_EQ(w.refresh_end, refresh);
+  EXPECT_EQ(w.bank_end, bank);
+  EXPECT_EQ(w.turn_end, turn);
+  EXPECT_EQ(w.queue_end, queue);
+}
+// The causes a wait from `from` to `to` is charged, accounted alone (no bus record: its
+// unloaded access all latency).
+RootCauseAccount chargedAlone(Cycle from, Cycle to, const WaitSplit& w) {
+  RootCauseAccount a;
+  a.setWait(from, w);
+  a.account(to);
+  return a;
+}
+
 // A wait from 4 to 20 whose DRAM unloaded access ends at 10 and queueing at
 // 15: 6 cycles of latency, 5 of bandwidth, 5 of the cache's own; then the
 // ALU from 20 to 30.
@@ -131,6 +148,109 @@ TEST(RootCauseAccount, UnloadedAccessWhileTheBusIsBusyIsBandwidth) {
   a.account(82);
   EXPECT_EQ(at(a, RootCause::DramLatency), 61u);
   EXPECT_EQ(at(a, RootCause::DramBandwidth), 21u);
+}
+
+// The queueing split by what the controller waited for (round configuration
+// as above: controller 40, tRCD = CL = tRP = 11, a burst 4, 8 KiB rows, 8
+// banks; tWTR 6 clocks = 6 cycles):
+//  - a bank conflict: a read of row 0 of bank 0 (done 66), then one of row 1
+//    of bank 0 (byte 8 x 8 KiB) asked at 0: its precharge waits for the first
+//    one's data (66), precharge to 77, activate to 88, data from 99: done
+//    103, 66 unloaded and 37 of queueing: from arrival + tRCD + CL = 62 to
+//    66 the bus moved the first read's data (bandwidth, 4), from 66 to 99
+//    the bank opened the row (bank conflict, 33);
+//  - a turnaround: a write to bank 1 drained at 40 (activate 40, data
+//    [62, 66)), then a read of bank 2 asked at 0: its row opens at 51, the
+//    bus is free at 66 (4 cycles behind arrival + tRCD + CL = 62: the bus),
+//    its column command waits for tWTR after the write data: 72, data at 83,
+//    done 87: 21 of queueing, 4 the bus's, 17 the turnaround's (tWTR + CL).
+TEST(RootCauseAccount, DramQueueingSplitsByWhatTheControllerWaitedFor) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  m.access(0, 0, 64, false, Surface::BlendArrays);
+  ASSERT_EQ(m.bankOf(8 * 8192), m.bankOf(0));
+  ASSERT_NE(m.rowOf(8 * 8192), m.rowOf(0));
+  m.resetProbe();
+  ASSERT_EQ(m.access(0, 8 * 8192, 64, false, Surface::BlendArrays), 103u);
+  WaitSplit w = splitWait(0, 103, m.probe());
+  expectEnds(w, 66, 66, 99, 99, 103);
+  const RootCauseAccount a = chargedAlone(0, 103, w);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 4u);
+
+  MemorySystem n(roundDramConfig(1), kRoundMhz);
+  ASSERT_EQ(n.twtrCycles(), 6.0);
+  ASSERT_EQ(n.access(0, 8192, 64, true, Surface::BlendArrays), 40u);
+  ASSERT_EQ(n.drainWrites(40), 66u);
+  n.resetProbe();
+  ASSERT_EQ(n.access(0, 2 * 8192, 64, false, Surface::BlendArrays), 87u);
+  w = splitWait(0, 87, n.probe());
+  const RootCauseAccount b = chargedAlone(0, 87, w);
+  EXPECT_EQ(at(b, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(b, RootCause::DramTurnaround), 17u);
+  EXPECT_EQ(at(b, RootCause::DramBandwidth), 4u);
+  EXPECT_EQ(at(b, RootCause::DramBankConflict), 0u);
+  EXPECT_EQ(b.total(), 87u);
+  // The approximate engine's shares take the same split.
+  DelayShares s;
+  RootCauseAccount d;
+  s.addWait(0, 87, w);
+  s.chargeTo(d, 87, RootCause::ScoreboardFull);
+  s.finish(d);  // the unloaded access's split waits for the bookings over it
+  EXPECT_EQ(d.cycles(), b.cycles());
+}
+
+// A refresh is charged what it moved a run by (round configuration, refresh
+// windows [1000, 1100) on channel 0: tREFI 1000 ns, tRFC 100 ns at 1 ns a
+// cycle). A read of row 0 of bank 0 asked at 900: activate 940, data [962,
+// 966). A read of row 1 of bank 0 asked at 900 would precharge at 966 (the
+// first one's data), activate 977, column 988, data [999, 1003): it meets
+// the window, so it goes after it, on the bank the refresh closed: activate
+// 1100, column 1111, data [1122, 1126), done 1126. Its wait: 66 unloaded,
+// 160 of queueing: the refresh moved its data from 999 to 1122 (123); where
+// it would have gone, it waited 4 for the bus (the first read's data, from
+// 940 + tRCD + CL = 962 to 966) and 33 for its bank (966 to 999). (Charged
+// from arrival to the window's end, first, the refresh took all 160.)
+TEST(RootCauseAccount, RefreshIsChargedWhatItMovedTheRun) {
+  DramConfig c = roundDramConfig(1);
+  c.trefi_ns = 1000.0;
+  c.trfc_ns = 100.0;
+  MemorySystem m(c, kRoundMhz);
+  ASSERT_EQ(m.access(900, 0, 64, false, Surface::BlendArrays), 966u);
+  ASSERT_EQ(m.bankOf(8 * 8192), m.bankOf(0));
+  m.resetProbe();
+  ASSERT_EQ(m.access(900, 8 * 8192, 64, false, Surface::BlendArrays), 1126u);
+  const WaitSplit w = splitWait(900, 1126, m.probe());
+  expectEnds(w, 966, 966 + 123, 966 + 123 + 33, 966 + 123 + 33, 1126);
+  const RootCauseAccount a = chargedAlone(900, 1126, w);
+  EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(a, RootCause::DramRefresh), 123u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 33u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 4u);
+}
+
+// The final drain is a wait like any other (round configuration): two
+// writes to rows 0 and 1 of bank 1 posted at 0 (accepted at 40), drained
+// at 40: row 0 activates at 40, data [62, 66); row 1 precharges at 66,
+// activates at 77, column 88, data [99, 103): done 103. The batch's parts:
+// its data on the bus, 2 x 4, and the second run's bank, 66 to 99: 33. A
+// wait from 40: the write's unloaded access, the controller's 40; 23 of
+// queueing, 33 / 41 of it the bank's: 18 (floor of 18.5), 5 bandwidth.
+// (Before issue 22 s4 all 63 were dram_bandwidth.)
+TEST(RootCauseAccount, TheFinalDrainIsSplitByWhatTheDramDid) {
+  MemorySystem m(roundDramConfig(1), kRoundMhz);
+  ASSERT_EQ(m.bankOf(9 * 8192), m.bankOf(8192));
+  ASSERT_NE(m.rowOf(9 * 8192), m.rowOf(8192));
+  ASSERT_EQ(m.access(0, 8192, 64, true, Surface::BlendArrays), 40u);
+  ASSERT_EQ(m.access(0, 9 * 8192, 64, true, Surface::BlendArrays), 40u);
+  m.resetProbe();
+  ASSERT_EQ(m.drainWrites(40), 103u);
+  EXPECT_EQ(m.probe().done, 103u);
+  EXPECT_EQ(m.probe().unloaded, 40u);
+  const RootCauseAccount a = chargedAlone(40, 103, splitWait(40, 103, m.probe()));
+  EXPECT_EQ(at(a, RootCause::DramLatency), 40u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), 18u);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 5u);
 }
 
 }  // namespace
