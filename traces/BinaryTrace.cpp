@@ -369,14 +369,8 @@ class BinaryWriter final : public FragmentSink {
   uint64_t written_ = 0;
 };
 
-// Header checked before the temporary file is created: a bad header leaves nothing behind.
-const TraceHeader& checkedHeader(const std::string& path, const TraceHeader& h) {
-  checkHeaderForWrite(path, h);
-  return h;
-}
-
 BinaryWriter::BinaryWriter(const std::string& path, const TraceHeader& header)
-    : header_(checkedHeader(path, header)),
+    : header_(checkHeaderForWrite(path, header)),
       record_bytes_(fv::recordBytes(header.encoding)),
       data_offset_(fv::headerBytesFor(header.draws.size(), header.version)),
       file_(path) {

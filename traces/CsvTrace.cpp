@@ -185,7 +185,7 @@ class LineReader {
   uint64_t next_offset_ = 0;
 };
 
-struct DrawState {
+struct CsvDraw {
   size_t index;          // into TraceHeader::draws
   bool declared;         // listed by a "# draw" comment line
   uint64_t where_line;   // the comment line, or the draw's first row
@@ -227,7 +227,7 @@ class CsvReader final : public FragmentSource {
   LineReader in_;
   std::optional<uint32_t> meta_width_, meta_height_;
   bool meta_version_ = false, meta_camera_ = false, meta_encoding_ = false;
-  std::unordered_map<uint32_t, DrawState> draws_;
+  std::unordered_map<uint32_t, CsvDraw> draws_;
   RecordRules rules_;
   uint64_t data_offset_ = 0;  // first byte after the column line
   uint64_t data_line_ = 0;    // line number of the first line after the column line
@@ -469,7 +469,7 @@ void CsvReader::parseMetadata(std::string_view line) {
            fmt::format("duplicate draw id {} (also declared at line {})", d.id, it->second.where_line));
     if (header_.draws.size() >= fv::kMaxDraws)
       fail(id_offset, std::nullopt, key, tooManyDraws(d.id));
-    draws_.emplace(d.id, DrawState{header_.draws.size(), true, in_.number()});
+    draws_.emplace(d.id, CsvDraw{header_.draws.size(), true, in_.number()});
     header_.draws.push_back(std::move(d));
   }
 }
@@ -551,10 +551,10 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
     if (header_.version == fv::kVersion2)
       err(kDraw, start[kDraw], fmt::format("draw {} is not declared: version 2 declares every draw with its state", f.draw));
     // Undeclared draw: named after its id, classed by its opaque column.
-    draws_.emplace(f.draw, DrawState{header_.draws.size(), false, in_.number()});
+    draws_.emplace(f.draw, CsvDraw{header_.draws.size(), false, in_.number()});
     header_.draws.push_back(DrawInfo{f.draw, cls, fmt::format("draw{}", f.draw)});
   } else if (header_.draws[it->second.index].cls != cls) {
-    const DrawState& s = it->second;
+    const CsvDraw& s = it->second;
     err(kOpaque, start[kOpaque],
         fmt::format("opaque {} but draw {} is {} ({} line {})", field[kOpaque], f.draw,
                     toString(header_.draws[s.index].cls),
@@ -612,13 +612,8 @@ class CsvWriter final : public FragmentSink {
   fmt::memory_buffer row_;
 };
 
-const TraceHeader& checkedHeader(const std::string& path, const TraceHeader& h) {
-  checkHeaderForWrite(path, h);
-  return h;
-}
-
 CsvWriter::CsvWriter(const std::string& path, const TraceHeader& header)
-    : header_(checkedHeader(path, header)), file_(path) {
+    : header_(checkHeaderForWrite(path, header)), file_(path) {
   rules_.width = header_.width;
   rules_.height = header_.height;
   rules_.draws = DrawSet(header_.draws);

@@ -288,7 +288,7 @@ std::optional<std::string> cameraProblem(float near_plane, float far_plane) {
                      fmtFloat(near_plane), fmtFloat(far_plane));
 }
 
-void checkHeaderForWrite(const std::string& file, const TraceHeader& h) {
+const TraceHeader& checkHeaderForWrite(const std::string& file, const TraceHeader& h) {
   auto fail = [&](size_t offset, std::string field, const std::string& msg) {
     throw TraceError(file, offset, std::nullopt, std::move(field), msg);
   };
@@ -326,6 +326,7 @@ void checkHeaderForWrite(const std::string& file, const TraceHeader& h) {
     if (auto p = drawNameProblem(d.name)) fail(entry + fv::kDrawOffName, fmt::format("draw[{}].name", i), *p);
   }
   if (auto p = headerStatesProblem(h)) fail(p->offset, p->field, p->message);
+  return h;
 }
 
 }  // namespace oit::detail

@@ -70,8 +70,9 @@ std::string coordMessage(format_v1::Field f, uint64_t value, uint32_t limit);
 std::optional<std::string> unitMessage(format_v1::Field f, float v);
 
 // Validates a header given to a writer; throws TraceError naming `file`, the
-// binary byte offset of the field and the field.
-void checkHeaderForWrite(const std::string& file, const TraceHeader& h);
+// binary byte offset of the field and the field. Returns h, so that a writer
+// checks its header before it creates its temporary file.
+const TraceHeader& checkHeaderForWrite(const std::string& file, const TraceHeader& h);
 // Checks a draw name (length, no control bytes, valid UTF-8); returns the problem or nullopt.
 std::optional<std::string> drawNameProblem(const std::string& name);
 // Index of the first byte of s that does not start a well-formed UTF-8

@@ -6,11 +6,9 @@
 
 namespace oit::rop {
 
-namespace {
-void require(bool ok, const char* what) {
+void requireDramConfig(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("DramConfig: ") + what);
 }
-}  // namespace
 
 uint64_t DramTimings::ticks(double cycles) {
   const double t = std::ldexp(cycles, static_cast<int>(kTickShift));
@@ -20,12 +18,12 @@ uint64_t DramTimings::ticks(double cycles) {
 }
 
 DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
-  require(core_mhz > 0, "core_mhz must be > 0");
-  require(cfg.channels >= 1, "channels must be >= 1");
-  require(cfg.channel_gbps > 0, "channel_gbps must be > 0");
-  require(cfg.tck_ns > 0, "tck_ns must be > 0");
-  require(cfg.controller_ns >= 0, "controller_ns must be >= 0");
-  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
+  requireDramConfig(core_mhz > 0, "core_mhz must be > 0");
+  requireDramConfig(cfg.channels >= 1, "channels must be >= 1");
+  requireDramConfig(cfg.channel_gbps > 0, "channel_gbps must be > 0");
+  requireDramConfig(cfg.tck_ns > 0, "tck_ns must be > 0");
+  requireDramConfig(cfg.controller_ns >= 0, "controller_ns must be >= 0");
+  requireDramConfig(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
   const double cycles_per_ns = core_mhz / 1000.0;
   const auto tck = [&](unsigned n) { return ticks(n * cfg.tck_ns * cycles_per_ns); };
   // GB/s / (cycles/s): channel_gbps * 1e9 / (core_mhz * 1e6)
@@ -39,12 +37,12 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
   trtw = tck(cfg.trtw);
   const double burst_cycles = cfg.burst_bytes / bytes_per_cycle;
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
-  require(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
+  requireDramConfig(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
   burst = ticks(burst_cycles);
-  require(burst >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
+  requireDramConfig(burst >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
   if (cfg.trefi_ns > 0) {
     const std::string problem = refreshProblem(cfg, core_mhz);
-    require(problem.empty(), problem.c_str());
+    requireDramConfig(problem.empty(), problem.c_str());
     refresh_period = ticks(cfg.trefi_ns * cycles_per_ns);
     refresh_rfc = ticks(cfg.trfc_ns * cycles_per_ns);
     for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);

@@ -14,6 +14,10 @@
 
 namespace oit::rop {
 
+// Throws std::invalid_argument("DramConfig: " + what) unless ok: the DRAM
+// timing and address-map checks share one message form.
+void requireDramConfig(bool ok, const char* what);
+
 struct DramTimings {
   static constexpr unsigned kTickShift = 16;
   static constexpr uint64_t kTicksPerCycle = uint64_t(1) << kTickShift;

@@ -12,19 +12,15 @@ namespace oit::rop {
 
 namespace {
 
-void require(bool ok, const char* what) {
-  if (!ok) throw std::invalid_argument(std::string("DramConfig: ") + what);
-}
-
 // The geometry the address map needs (a burst never straddles a channel or a
 // row), checked before the map is built from it.
 const DramConfig& checkedGeometry(const DramConfig& cfg) {
-  require(cfg.channels >= 1, "channels must be >= 1");
-  require(cfg.banks >= 1, "banks must be >= 1");
-  require(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
-  require(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
+  requireDramConfig(cfg.channels >= 1, "channels must be >= 1");
+  requireDramConfig(cfg.banks >= 1, "banks must be >= 1");
+  requireDramConfig(cfg.burst_bytes >= 1, "burst_bytes must be >= 1");
+  requireDramConfig(cfg.interleave_bytes >= cfg.burst_bytes && cfg.interleave_bytes % cfg.burst_bytes == 0,
           "interleave_bytes must be a multiple of burst_bytes");
-  require(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
+  requireDramConfig(cfg.row_bytes >= cfg.burst_bytes && cfg.row_bytes % cfg.burst_bytes == 0,
           "row_bytes must be a multiple of burst_bytes");
   return cfg;
 }
@@ -45,7 +41,7 @@ uint64_t MemoryStats::writeBytes() const {
 
 MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
     : cfg_(checkedGeometry(cfg)), map_(cfg_), t_(cfg_, core_mhz) {
-  require(cfg.write_queue >= 1 && cfg.write_high >= 1 && cfg.write_high <= cfg.write_queue &&
+  requireDramConfig(cfg.write_queue >= 1 && cfg.write_high >= 1 && cfg.write_high <= cfg.write_queue &&
               cfg.write_low < cfg.write_high,
           "write watermarks must satisfy write_low < write_high <= write_queue");
   channels_.assign(cfg.channels, Channel(cfg));

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 // Two scenes x two machines x (mlab and adaptive at k = 2, 4, and wboit): 20
 // timing points, plus the A-buffer reference of each scene in the grid.
-const char* kSpec = R"({
+const char* kBrowserSpec = R"({
   "traces": [
     {"gen": "particles", "width": 96, "height": 54, "count": 120, "backdrop": true},
     {"gen": "hair", "width": 96, "height": 54}
@@ -33,7 +33,7 @@ class ReportBrowser : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir("report_browser");
-    writeText(dir_->file("spec.json"), kSpec);
+    writeText(dir_->file("spec.json"), kBrowserSpec);
     sweep_ = new CliResult(runOitsim("sweep -q " + dir_->file("spec.json") + " --out " + dir_->file("sw") + " -j 2"));
     if (sweep_->exit_code == 0 && haveMatplotlib()) report_ = new CliResult(runOitsim("report " + dir_->file("sw")));
   }

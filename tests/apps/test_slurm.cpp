@@ -240,7 +240,7 @@ class LocalSlurm {
 };
 
 // Three functional points on one small generated trace.
-const char* kSpec = R"({
+const char* kSlurmSpec = R"({
   "traces": [{"gen": "particles", "width": 96, "height": 54, "count": 150, "backdrop": true}],
   "base": {"mode": "functional", "format": "fp32", "layers": 4},
   "axes": {"algo": ["mlab", "hybrid", "adaptive"]}
@@ -253,7 +253,7 @@ TEST(SlurmCluster, EmittedJobArrayRunsOnLocalhostAndMatchesALocalSweep) {
   const std::string why = cluster.start();
   if (!why.empty()) GTEST_SKIP() << "one-node Slurm on localhost unavailable: " << why;
   const fs::path d = cluster.dir();
-  std::ofstream(d / "spec.json") << kSpec;
+  std::ofstream(d / "spec.json") << kSlurmSpec;
   const std::string spec = (d / "spec.json").string();
 
   // The same spec run locally: the reference table.

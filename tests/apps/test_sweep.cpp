@@ -21,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kSpec = R"({
+const char* kSweepSpec = R"({
   "traces": [
     {"gen": "particles", "width": 160, "height": 90, "count": 300, "backdrop": true},
     {"gen": "hair", "width": 160, "height": 90}
@@ -35,7 +35,7 @@ class Sweep : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir("sweep");
-    writeText(dir_->file("spec.json"), kSpec);
+    writeText(dir_->file("spec.json"), kSweepSpec);
     out_ = dir_->file("out");
     result_ = new CliResult(runOitsim("sweep " + dir_->file("spec.json") + " --out " + out_ + " --jobs 2"));
   }

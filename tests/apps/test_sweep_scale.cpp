@@ -14,12 +14,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kSpec = R"({"traces": [{"gen": "glass", "width": 48, "height": 32}],
+const char* kResumeSpec = R"({"traces": [{"gen": "glass", "width": 48, "height": 32}],
   "base": {"mode": "functional"}, "axes": {"algo": ["mlab", "hybrid", "adaptive"]}})";
 
 TEST(SweepScale, ResumedSweepRunsOnlyWhatHasNotFinished) {
   TempDir d("sweep_resume");
-  writeText(d.file("s.json"), kSpec);
+  writeText(d.file("s.json"), kResumeSpec);
   const std::string o = d.file("o");
   CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + o + " -j 2");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -50,7 +50,7 @@ TEST(SweepScale, ResumedSweepRunsOnlyWhatHasNotFinished) {
 // Three points at two per task: task 0 runs points 0 and 1, task 1 point 2.
 TEST(SweepScale, SlurmTasksRunChunksOfPointsWithTheSiteOptions) {
   TempDir d("sweep_chunks");
-  writeText(d.file("s.json"), kSpec);
+  writeText(d.file("s.json"), kResumeSpec);
   const std::string o = d.file("o");
   CliResult r = runOitsim("sweep " + d.file("s.json") + " --out " + o +
                           " --emit slurm --points-per-task 2 --time 0:30:00 --mem 2G --partition short "
@@ -96,7 +96,7 @@ TEST(SweepScale, AFailedPointDoesNotStopItsTask) {
 // Each refused before anything is created: one line naming the option or key.
 TEST(SweepScale, BadSlurmOptionsAndUnusedAxesAreRefusedBeforeAnythingIsCreated) {
   TempDir d("sweep_bad_scale");
-  writeText(d.file("s.json"), kSpec);
+  writeText(d.file("s.json"), kResumeSpec);
   writeText(d.file("unused.json"), R"({"traces": [{"gen": "glass"}], "axes": {"algo": ["abuffer"], "layers": [2, 4]}})");
   const std::string spec = d.file("s.json"), o = d.file("o");
   const std::vector<std::pair<std::string, std::string>> cases = {

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "model/FloatSpecials.hpp"
 #include "model/Image.hpp"
 
 using namespace oit::model;
@@ -87,8 +88,8 @@ void writeBytes(const std::string& p, const std::string& bytes) {
 double srgbToLinear(double s) { return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4); }
 
 uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using oit::model::testutil::kInf;
+using oit::model::testutil::kNaN;
 
 }  // namespace
 

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "model/FloatSpecials.hpp"
 #include "model/OitAlgorithm.hpp"
 #include "model/StorageFormat.hpp"
 
@@ -23,8 +24,8 @@ using namespace oit::model;
 
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using oit::model::testutil::kInf;
+using oit::model::testutil::kNaN;
 
 float fromBits(uint32_t u) { return std::bit_cast<float>(u); }
 

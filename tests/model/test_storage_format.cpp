@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "model/FloatSpecials.hpp"
 #include "model/AlgorithmDetail.hpp"  // requantizedHalves
 #include "model/StorageFormat.hpp"
 
@@ -19,8 +20,8 @@ using namespace oit::model;
 
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using oit::model::testutil::kInf;
+using oit::model::testutil::kNaN;
 
 uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
 float fromBits(uint32_t u) { return std::bit_cast<float>(u); }

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -104,6 +105,12 @@ inline TimingResult timed(const std::string& algo, const model::AlgorithmParams&
   model::MemorySource src(model::testutil::header(w, h), fs, 333);
   auto a = model::makeAlgorithm(algo, p);
   return runTiming(src, *a, cfg, opt);
+}
+
+// Bit-identical images (NaN-safe, unlike ==).
+inline bool sameBits(const model::Image& a, const model::Image& b) {
+  return a.width == b.width && a.height == b.height &&
+         std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(model::Rgb)) == 0;
 }
 
 }  // namespace oit::rop::testutil

@@ -19,16 +19,16 @@ using namespace oit::rop::testutil;
 
 namespace {
 
-constexpr uint32_t W = 64, H = 64;
+constexpr uint32_t kFrameW = 64, kFrameH = 64;
 
 // The transparent fragments that reach the A-buffer: in front of their pixel's
 // nearest opaque fragment (a = 0 included: the A-buffer keeps them).
 uint64_t fragmentsInFront(const std::vector<Fragment>& fs) {
-  std::vector<float> opaque_z(size_t(W) * H, std::numeric_limits<float>::infinity());
+  std::vector<float> opaque_z(size_t(kFrameW) * kFrameH, std::numeric_limits<float>::infinity());
   for (const Fragment& f : fs)
-    if (f.draw == model::testutil::kOpaqueDraw) opaque_z[f.y * W + f.x] = std::min(opaque_z[f.y * W + f.x], f.z);
+    if (f.draw == model::testutil::kOpaqueDraw) opaque_z[f.y * kFrameW + f.x] = std::min(opaque_z[f.y * kFrameW + f.x], f.z);
   uint64_t n = 0;
-  for (const Fragment& f : fs) n += f.draw != model::testutil::kOpaqueDraw && f.z < opaque_z[f.y * W + f.x];
+  for (const Fragment& f : fs) n += f.draw != model::testutil::kOpaqueDraw && f.z < opaque_z[f.y * kFrameW + f.x];
   return n;
 }
 
@@ -47,11 +47,11 @@ class AbufferBudgetOn : public ::testing::TestWithParam<SimEngine> {};
 // Each budget changes the image (it differs from the unlimited A-buffer's),
 // and the timing run's image is the functional run's, bit for bit.
 TEST_P(AbufferBudgetOn, TimingImageEqualsTheFunctionalImageUnderDropsAndTruncation) {
-  const auto fs = smallScene(W, H, 8, 31);
+  const auto fs = smallScene(kFrameW, kFrameH, 8, 31);
   const uint64_t in_front = fragmentsInFront(fs);
-  const uint64_t capacity = uint64_t(W) * H;  // nodes_per_pixel 1
+  const uint64_t capacity = uint64_t(kFrameW) * kFrameH;  // nodes_per_pixel 1
   ASSERT_GT(in_front, 2 * capacity);           // the pool overflows by more than half
-  const auto exact = model::testutil::render("abuffer", model::AlgorithmParams{}, fs, W, H);
+  const auto exact = model::testutil::render("abuffer", model::AlgorithmParams{}, fs, kFrameW, kFrameH);
   for (const Budget& b : {Budget{"pool", 1.0, 0, model::StorageFormat::Fp32},
                           Budget{"truncate", 0.0, 2, model::StorageFormat::Fp32},
                           Budget{"pool+truncate rgba8", 1.0, 2, model::StorageFormat::Rgba8T8Z32}}) {
@@ -66,8 +66,8 @@ TEST_P(AbufferBudgetOn, TimingImageEqualsTheFunctionalImageUnderDropsAndTruncati
     cfg.abuffer.nodes_per_pixel = b.nodes_per_pixel;
     cfg.abuffer.max_sorted = b.max_sorted ? b.max_sorted : cfg.abuffer.max_sorted;
     cfg.abuffer.overflow = ABufferOverflowPolicy::Truncate;
-    const auto functional = model::testutil::render("abuffer", p, fs, W, H);
-    const auto r = runInChild([&] { return timed("abuffer", p, fs, W, H, cfg); });
+    const auto functional = model::testutil::render("abuffer", p, fs, kFrameW, kFrameH);
+    const auto r = runInChild([&] { return timed("abuffer", p, fs, kFrameW, kFrameH, cfg); });
     ASSERT_TRUE(r.ok) << r.error;
     EXPECT_EQ(model::testutil::maxDiff(r.image, functional.image), 0.0);
     EXPECT_GT(model::testutil::maxDiff(r.image, exact.image), 0.0);  // the budget is visible in the image

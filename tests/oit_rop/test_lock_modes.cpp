@@ -50,18 +50,18 @@ uint64_t findSeed(F&& want) {
 const Fragment kFirst = frag(0, 0, 0.3f, 1, 0, 0, 0.5f, kTranspDraw, 0);
 const Fragment kSecond = frag(0, 0, 0.6f, 0, 1, 0, 0.5f, kTranspDraw, 1);
 
-model::AlgorithmParams rgba8() {
+model::AlgorithmParams rgba8Format() {
   model::AlgorithmParams p;
   p.format = model::StorageFormat::Rgba8T8Z32;
   return p;
 }
 
 model::Image functional(const std::vector<Fragment>& fs) {
-  return model::testutil::render("alpha", rgba8(), fs, 2, 2).image;
+  return model::testutil::render("alpha", rgba8Format(), fs, 2, 2).image;
 }
 
 ChildRun run(const std::vector<Fragment>& fs, const RopConfig& cfg) {
-  ChildRun r = runInChild([&] { return timed("alpha", rgba8(), fs, 2, 2, cfg); });
+  ChildRun r = runInChild([&] { return timed("alpha", rgba8Format(), fs, 2, 2, cfg); });
   EXPECT_TRUE(r.ok) << r.error;
   return r;
 }

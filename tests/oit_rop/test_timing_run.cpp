@@ -26,11 +26,6 @@ namespace {
 
 constexpr uint32_t W = 64, H = 64;
 
-bool sameBits(const model::Image& a, const model::Image& b) {
-  return a.width == b.width && a.height == b.height &&
-         std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(model::Rgb)) == 0;
-}
-
 void expectCountsEqual(const model::RenderCounts& t, const model::RenderCounts& f) {
   EXPECT_EQ(t.fragments_in, f.fragments_in);
   EXPECT_EQ(t.opaque, f.opaque);

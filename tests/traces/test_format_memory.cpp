@@ -13,10 +13,10 @@
 namespace oit::test {
 namespace {
 
-constexpr uint32_t kW = 1920, kH = 1080;
+constexpr uint32_t kFullHdW = 1920, kFullHdH = 1080;
 
 Fragment fragmentAt(uint64_t i) {
-  return Fragment{static_cast<uint16_t>(i % kW), static_cast<uint16_t>((i / kW) % kH),
+  return Fragment{static_cast<uint16_t>(i % kFullHdW), static_cast<uint16_t>((i / kFullHdW) % kFullHdH),
                   static_cast<float>(i % 1000) / 1000.0f, 0.25f, 0.5f, 0.75f, 0.5f,
                   static_cast<uint32_t>(i), static_cast<uint32_t>(i % 3)};
 }
@@ -28,7 +28,7 @@ void streamWithinBudget(ColourEncoding enc, uint64_t file_bytes) {
   TempDir dir;
   const std::string p = dir.path("big.oitt");
   {
-    auto w = createTraceWriter(p, makeHeader(kW, kH, enc,
+    auto w = createTraceWriter(p, makeHeader(kFullHdW, kFullHdH, enc,
                                              {{0, DrawClass::Opaque, "a"},
                                               {1, DrawClass::Transparent, "b"},
                                               {2, DrawClass::Transparent, "c"}}));

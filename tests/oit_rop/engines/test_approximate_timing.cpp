@@ -208,11 +208,6 @@ RopConfig approximate(RopConfig c = smallConfig()) {
   return c;
 }
 
-bool sameBits(const model::Image& a, const model::Image& b) {
-  return a.width == b.width && a.height == b.height &&
-         std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(model::Rgb)) == 0;
-}
-
 uint64_t stagesTotal(const nlohmann::json& st) {
   uint64_t stalls = 0;
   for (const auto& [cause, v] : st["stalls"].items()) stalls += v.get<uint64_t>();
