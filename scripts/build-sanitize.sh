@@ -7,7 +7,9 @@
 # ASan's checks cost more than the optimisation gains; NDEBUG as in Release, so
 # the tests check the code that ships. Used by scripts/sanitize.sh and
 # scripts/fuzz.sh. OITSIM_SANITIZE_BUILD_DIR and OITSIM_JOBS as there;
-# OITSIM_SANITIZE_TARGETS (space-separated) builds only those targets.
+# OITSIM_SANITIZE_TARGETS (space-separated) builds only those targets. A new
+# folder is a unity build (OITSIM_UNITY=OFF for one you edit often: see
+# scripts/build.sh).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${OITSIM_SANITIZE_BUILD_DIR:-$root/build-sanitize}
@@ -19,7 +21,8 @@ if [ ! -f "$build/build.ninja" ]; then
   command -v ccache >/dev/null && opts+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -DNDEBUG" \
     -DCMAKE_CXX_COMPILER="$cxx" \
-    -DOITSIM_SANITIZE=address,undefined -DOITSIM_FUZZ=ON -DOITSIM_BUILD_BENCH=OFF "${opts[@]}" >/dev/null
+    -DOITSIM_SANITIZE=address,undefined -DOITSIM_FUZZ=ON -DOITSIM_BUILD_BENCH=OFF \
+    -DCMAKE_UNITY_BUILD="${OITSIM_UNITY:-ON}" "${opts[@]}" >/dev/null
 fi
 targets=()
 for t in ${OITSIM_SANITIZE_TARGETS:-}; do targets+=(--target "$t"); done

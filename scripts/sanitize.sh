@@ -4,10 +4,9 @@
 # the libFuzzer harnesses of tests/fuzz are built there too), then every test
 # through ctest except those labelled systemc-process-exception (see
 # tests/CMakeLists.txt for why ASan cannot check them).
-#   scripts/sanitize.sh [ctest options, e.g. -R Csv]
-#   scripts/sanitize.sh --quick   (what CI runs: the model and trace tests and
-#     the fuzz harnesses' build; the whole suite passed under ASan once, in
-#     about 20 minutes, too long for CI: tests/README.md has the figures)
+#   scripts/sanitize.sh [ctest options, e.g. -R Csv]   (what CI runs, without options)
+#   scripts/sanitize.sh --quick   (test_model and test_traces only, and the fuzz
+#     harnesses' build: a few minutes, while iterating on those folders)
 # OITSIM_SANITIZE_BUILD_DIR and OITSIM_JOBS change the folder and parallelism.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
