@@ -409,6 +409,34 @@ TEST_F(ApitraceCapture, ADrawThatOutgrowsTheFirstRecordBufferIsCapturedByASecond
   EXPECT_EQ(capped.frames[0].uncaptured[0].fragments, mesh_.fragments.size());
 }
 
+// GLSL ES shaders on desktop GL (ARB_ES3_compatibility / ARB_ES2_compatibility):
+// a `#version 300 es` program with an `out` variable and a `#version 100` program
+// with gl_FragColor and mediump. The capture rewrites them as GLSL ES 3.20
+// (ShaderRewrite.cpp); each captured draw equals the mesh capture of the same
+// triangles bit for bit, and --verify passes on the frame.
+TEST_F(ApitraceCapture, GlslEsShadersMatchTheMeshCapture) {
+  const std::string trace = traceApp({
+      "es300 over off",   // 0: GLSL ES 3.00, `out`, depth test off
+      "es100 over test",  // 1: GLSL ES 1.00, gl_FragColor; depth test LESS without writes: all pass
+  });
+  const ApitraceResult r = verifiedCapture(trace);
+  ASSERT_EQ(r.frames.size(), 1u);
+  const FrameCapture& f = r.frames[0];
+  EXPECT_EQ(f.draw_calls, 2u);
+  EXPECT_TRUE(f.uncaptured.empty()) << frameSummary(f, "out.oitt");
+  const std::vector<Fragment> d0 = ofDraw(f, 0), d1 = ofDraw(f, 1);
+  EXPECT_TRUE(same(d0, expected(0))) << firstDifference(d0, expected(0));
+  EXPECT_TRUE(same(d1, expected(1))) << firstDifference(d1, expected(1));
+  EXPECT_EQ(f.fragments.size(), 2 * mesh_.fragments.size());
+  ASSERT_NE(drawOf(f, 0), nullptr);
+  ASSERT_NE(drawOf(f, 1), nullptr);
+  EXPECT_EQ(drawOf(f, 0)->state->blend, BlendMode::Over);
+  EXPECT_TRUE(drawOf(f, 1)->state->depth_test);
+  const TransparentVerifyResult v = verifyTransparentDraws(f);
+  EXPECT_TRUE(v.passes()) << v.first_difference << v.first_drawing_difference;
+  EXPECT_EQ(v.channels_differing, 0u) << v.first_difference;
+}
+
 // Draws the trace cannot express are counted and listed per frame, never dropped
 // silently, and none of their fragments is in the trace: several render targets
 // (glDrawBuffers of two attachments), a multisampled framebuffer object (4
