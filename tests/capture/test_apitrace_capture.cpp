@@ -409,6 +409,98 @@ TEST_F(ApitraceCapture, ADrawThatOutgrowsTheFirstRecordBufferIsCapturedByASecond
   EXPECT_EQ(capped.frames[0].uncaptured[0].fragments, mesh_.fragments.size());
 }
 
+// GLSL ES shaders on desktop GL (ARB_ES3_compatibility / ARB_ES2_compatibility):
+// a `#version 300 es` program with an `out` variable and a `#version 100` program
+// with gl_FragColor and mediump. The capture rewrites them as GLSL ES 3.20
+// (ShaderRewrite.cpp); each captured draw equals the mesh capture of the same
+// triangles bit for bit, and --verify passes on the frame.
+TEST_F(ApitraceCapture, GlslEsShadersMatchTheMeshCapture) {
+  const std::string trace = traceApp({
+      "es300 over off",   // 0: GLSL ES 3.00, `out`, depth test off
+      "es100 over test",  // 1: GLSL ES 1.00, gl_FragColor; depth test LESS without writes: all pass
+  });
+  const ApitraceResult r = verifiedCapture(trace);
+  ASSERT_EQ(r.frames.size(), 1u);
+  const FrameCapture& f = r.frames[0];
+  EXPECT_EQ(f.draw_calls, 2u);
+  EXPECT_TRUE(f.uncaptured.empty()) << frameSummary(f, "out.oitt");
+  const std::vector<Fragment> d0 = ofDraw(f, 0), d1 = ofDraw(f, 1);
+  EXPECT_TRUE(same(d0, expected(0))) << firstDifference(d0, expected(0));
+  EXPECT_TRUE(same(d1, expected(1))) << firstDifference(d1, expected(1));
+  EXPECT_EQ(f.fragments.size(), 2 * mesh_.fragments.size());
+  ASSERT_NE(drawOf(f, 0), nullptr);
+  ASSERT_NE(drawOf(f, 1), nullptr);
+  EXPECT_EQ(drawOf(f, 0)->state->blend, BlendMode::Over);
+  EXPECT_TRUE(drawOf(f, 1)->state->depth_test);
+  const TransparentVerifyResult v = verifyTransparentDraws(f);
+  EXPECT_TRUE(v.passes()) << v.first_difference << v.first_drawing_difference;
+  EXPECT_EQ(v.channels_differing, 0u) << v.first_difference;
+}
+
+// Draws the trace cannot express are counted and listed per frame, never dropped
+// silently, and none of their fragments is in the trace: several render targets
+// (glDrawBuffers of two attachments), a multisampled framebuffer object (4
+// samples), the stencil test deciding coverage (GL_EQUAL). The stencil test on
+// with GL_ALWAYS does not decide coverage: that draw is captured.
+TEST_F(ApitraceCapture, DrawsTheTraceCannotExpressAreListedPerFrame) {
+  const std::string trace = traceApp({
+      "glsl330 over off",                // 0: captured
+      "mrt over off",                    // 1: two draw buffers
+      "glsl330+msaa over off",           // 2: 4-sample framebuffer object
+      "glsl330+stencil over off",        // 3: stencil test, GL_EQUAL 0
+      "glsl120+stencilalways over off",  // 4: stencil test, GL_ALWAYS: captured
+  });
+  ApitraceOptions o = options(trace, 1);
+  o.last_frame = 2;
+  const ApitraceResult r = captureApitrace(o);
+  ASSERT_EQ(r.frames.size(), 2u);
+  for (const FrameCapture& f : r.frames) {
+    SCOPED_TRACE(fmt::format("frame {}", f.frame));
+    EXPECT_EQ(f.draw_calls, 5u);
+    ASSERT_EQ(f.uncaptured.size(), 3u);
+    const uint32_t reasons[3] = {stream::kSeveralTargets, stream::kMultisample, stream::kStencil};
+    for (uint32_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(f.uncaptured[k].index, k + 1);
+      EXPECT_EQ(f.uncaptured[k].reason, reasons[k]);
+      EXPECT_EQ(f.uncaptured[k].function, "glDrawArrays");
+      EXPECT_EQ(drawOf(f, k + 1), nullptr);  // not in the draw table
+      EXPECT_TRUE(ofDraw(f, k + 1).empty());  // no fragment of it in the trace
+    }
+    // Exactly the two captured draws' fragments, each the mesh capture's.
+    EXPECT_EQ(f.fragments.size(), 2 * mesh_.fragments.size());
+    const std::vector<Fragment> d0 = ofDraw(f, 0), d4 = ofDraw(f, 4);
+    EXPECT_TRUE(same(d0, expected(0))) << firstDifference(d0, expected(0));
+    EXPECT_TRUE(same(d4, expected(4))) << firstDifference(d4, expected(4));
+    const std::string summary = frameSummary(f, "out.oitt");
+    EXPECT_NE(summary.find("\n  not captured: 3 draws\n    several render targets: draw 1\n"
+                           "    multisampled framebuffer: draw 2\n    stencil test: draw 3"),
+              std::string::npos)
+        << summary;
+  }
+}
+
+// --strict turns a draw the trace cannot express into an error: one line naming
+// the trace, the frame, the first such draw and why; exit 1; nothing written.
+// Without --strict the same frame is written and the summary lists the draw.
+TEST_F(ApitraceCapture, StrictRefusesAMultisampledDraw) {
+  const std::string oitsim = std::string(OITSIM_BINARY_DIR) + "/apps/oitsim";
+  const std::string trace = traceApp({"glsl330 over off", "glsl330+msaa over off"});
+  std::string out;
+  EXPECT_EQ(run(fmt::format("{} capture --apitrace {} --frames 1 --strict -o {}", oitsim, trace, path("x.oitt")), &out),
+            1)
+      << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find(trace + ": frame 1: 1 draw call not captured (--strict), the first draw 1 (glDrawArrays, program "),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("): multisampled framebuffer\n"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(path("x.oitt")));
+  ASSERT_EQ(run(fmt::format("{} capture --apitrace {} --frames 1 -o {}", oitsim, trace, path("y.oitt")), &out), 0)
+      << out;
+  EXPECT_NE(out.find("\n  not captured: 1 draw\n    multisampled framebuffer: draw 1"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(path("y.oitt")));
+}
+
 // Bad input: one line naming the file, the frame or the program; exit 1; nothing written.
 TEST_F(ApitraceCapture, ErrorsNameTheFileFrameOrProgram) {
   const std::string oitsim = std::string(OITSIM_BINARY_DIR) + "/apps/oitsim";

@@ -65,6 +65,21 @@ TEST(ShaderRewrite, Es100BecomesOne320Source) {
   EXPECT_NE(out.find("oitsim_record(oitsim_frag_data[0], gl_FragCoord.z)"), std::string::npos) << out;
 }
 
+// GLSL ES links only shaders of one version: the vertex shader beside a rewritten
+// ES fragment shader goes to 3.20 as well (the GL side: GlslEsShadersMatchTheMeshCapture).
+TEST(ShaderRewrite, EsVertexStagesGoTo320) {
+  const std::string v100 = "#version 100\nattribute vec4 a;\nvarying vec2 uv;\nvoid main() { uv = a.xy; gl_Position = a; }\n";
+  const std::string out100 = glsl::esStageAt320(v100, glsl::inspect(v100));
+  EXPECT_EQ(out100.rfind("#version 320 es\n#define attribute in\n#define varying out\n#define texture2D texture\n", 0), 0u)
+      << out100;
+  EXPECT_NE(out100.find("attribute vec4 a;\nvarying vec2 uv;\nvoid main() { uv = a.xy; gl_Position = a; }\n"),
+            std::string::npos)
+      << out100;
+  EXPECT_EQ(out100.find("#version 100"), std::string::npos) << out100;
+  const std::string v300 = "#version 300 es\nin vec4 a;\nvoid main() { gl_Position = a; }\n";
+  EXPECT_EQ(glsl::esStageAt320(v300, glsl::inspect(v300)), "#version 320 es\nin vec4 a;\nvoid main() { gl_Position = a; }\n");
+}
+
 TEST(ShaderRewrite, OutputExpressions) {
   EXPECT_EQ(glsl::outputExpression("o", 0x8B52), "o");                          // vec4
   EXPECT_EQ(glsl::outputExpression("c", 0x8B51), "vec4(c, 1.0)");               // vec3

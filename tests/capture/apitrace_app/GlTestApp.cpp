@@ -13,7 +13,15 @@
 // KIND: glsl120 (gl_FragColor), glsl330 (core `out`), discard (3.30 core, discards
 // the pixels with odd x + y), fixed (no program: fixed function, client arrays),
 // clash (3.30 core declaring a uniform named like the capture's own: links as
-// written, fails to link after the capture's rewrite).
+// written, fails to link after the capture's rewrite), es300 (GLSL ES 3.00
+// vertex and fragment shaders, `out`), es100 (GLSL ES 1.00, gl_FragColor,
+// mediump), mrt (3.30 core writing two outputs, drawn with glDrawBuffers of
+// colour attachments 0 and 1: several render targets; needs fbo 1).
+// KIND may end in modifiers: +msaa (drawn into a 4-sample framebuffer object of
+// the frame's size, resolved into the frame's target afterwards), +stencil (the
+// stencil test on, GL_EQUAL 0 against a stencil buffer cleared to 0: every
+// fragment passes, but coverage depends on the stencil; needs fbo 1),
+// +stencilalways (the stencil test on with GL_ALWAYS: coverage does not depend on it).
 // BLEND: off, over (SRC_ALPHA, ONE_MINUS_SRC_ALPHA), premul (ONE,
 // ONE_MINUS_SRC_ALPHA), additive (ONE, ONE). DEPTH: off, test (LESS, no writes),
 // write (LESS and writes).
@@ -34,6 +42,7 @@ namespace {
 
 struct Draw {
   std::string kind, blend, depth;
+  bool msaa = false, stencil = false, stencil_always = false;
   float colour[4] = {};
   std::vector<float> clip;  // x y z w per vertex
 };
@@ -64,6 +73,14 @@ Scene readScene(const char* path) {
       Draw d;
       size_t n = 0;
       in >> d.kind >> d.blend >> d.depth >> d.colour[0] >> d.colour[1] >> d.colour[2] >> d.colour[3] >> n;
+      for (size_t plus = d.kind.rfind('+'); plus != std::string::npos; plus = d.kind.rfind('+')) {
+        const std::string modifier = d.kind.substr(plus + 1);
+        d.kind.resize(plus);
+        if (modifier == "msaa") d.msaa = true;
+        else if (modifier == "stencil") d.stencil = true;
+        else if (modifier == "stencilalways") d.stencil_always = true;
+        else die("unknown draw modifier '+" + modifier + "' in " + path);
+      }
       d.clip.resize(4 * n);
       for (float& v : d.clip) in >> v;
       s.draws.push_back(std::move(d));
@@ -73,6 +90,9 @@ Scene readScene(const char* path) {
     if (!in) die(std::string("bad scene file ") + path);
   }
   if (s.width <= 0 || s.height <= 0) die("scene has no size");
+  for (const Draw& d : s.draws)
+    if (!s.fbo && (d.kind == "mrt" || d.stencil || d.stencil_always))
+      die("draws of kind mrt or with +stencil need fbo 1 (the window has no second target or stencil)");
   return s;
 }
 
@@ -115,6 +135,11 @@ struct Gl {
   PFNGLFRAMEBUFFERRENDERBUFFERPROC FramebufferRenderbuffer =
       proc<PFNGLFRAMEBUFFERRENDERBUFFERPROC>("glFramebufferRenderbuffer");
   PFNGLBLITFRAMEBUFFERPROC BlitFramebuffer = proc<PFNGLBLITFRAMEBUFFERPROC>("glBlitFramebuffer");
+  PFNGLRENDERBUFFERSTORAGEMULTISAMPLEPROC RenderbufferStorageMultisample =
+      proc<PFNGLRENDERBUFFERSTORAGEMULTISAMPLEPROC>("glRenderbufferStorageMultisample");
+  PFNGLDRAWBUFFERSPROC DrawBuffers = proc<PFNGLDRAWBUFFERSPROC>("glDrawBuffers");
+  PFNGLCHECKFRAMEBUFFERSTATUSPROC CheckFramebufferStatus =
+      proc<PFNGLCHECKFRAMEBUFFERSTATUSPROC>("glCheckFramebufferStatus");
 };
 
 const char* kVs120 = "#version 120\nattribute vec4 a_clip;\nvoid main() { gl_Position = a_clip; }\n";
@@ -127,6 +152,19 @@ const char* kFsDiscard =
     "#version 330 core\nuniform vec4 u_colour;\nout vec4 o_colour;\n"
     "void main() {\n  if (((int(gl_FragCoord.x) + int(gl_FragCoord.y)) & 1) == 1) discard;\n"
     "  o_colour = u_colour;\n}\n";
+// GLSL ES on desktop GL (ARB_ES3_compatibility, ARB_ES2_compatibility).
+const char* kVsEs300 =
+    "#version 300 es\nlayout(location = 0) in vec4 a_clip;\nvoid main() { gl_Position = a_clip; }\n";
+const char* kFsEs300 =
+    "#version 300 es\nprecision highp float;\nuniform vec4 u_colour;\nout vec4 o_colour;\n"
+    "void main() { o_colour = u_colour; }\n";
+const char* kVsEs100 = "#version 100\nattribute vec4 a_clip;\nvoid main() { gl_Position = a_clip; }\n";
+const char* kFsEs100 =
+    "#version 100\nprecision mediump float;\nuniform vec4 u_colour;\nvoid main() { gl_FragColor = u_colour; }\n";
+// Two colour outputs (several render targets).
+const char* kFsMrt =
+    "#version 330 core\nuniform vec4 u_colour;\nlayout(location = 0) out vec4 o_colour;\n"
+    "layout(location = 1) out vec4 o_second;\nvoid main() { o_colour = u_colour; o_second = u_colour.abgr; }\n";
 // Links on its own; the capture's record code declares `uniform uint oitsim_mode`.
 const char* kFsClash =
     "#version 330 core\nuniform vec4 u_colour;\nuniform float oitsim_mode;\nout vec4 o_colour;\n"
@@ -148,9 +186,18 @@ GLuint compile(const Gl& gl, GLenum type, const char* src) {
 
 GLuint program(const Gl& gl, const std::string& kind) {
   const bool old = kind == "glsl120";
-  const char* fs = old ? kFs120 : kind == "discard" ? kFsDiscard : kind == "clash" ? kFsClash : kFs330;
+  const char* fs = old                 ? kFs120
+                   : kind == "discard" ? kFsDiscard
+                   : kind == "clash"   ? kFsClash
+                   : kind == "es300"   ? kFsEs300
+                   : kind == "es100"   ? kFsEs100
+                   : kind == "mrt"     ? kFsMrt
+                   : kind == "glsl330" ? kFs330
+                                       : nullptr;
+  if (!fs) die("unknown draw kind '" + kind + "'");
+  const char* vs = old ? kVs120 : kind == "es300" ? kVsEs300 : kind == "es100" ? kVsEs100 : kVs330;
   const GLuint p = gl.CreateProgram();
-  gl.AttachShader(p, compile(gl, GL_VERTEX_SHADER, old ? kVs120 : kVs330));
+  gl.AttachShader(p, compile(gl, GL_VERTEX_SHADER, vs));
   gl.AttachShader(p, compile(gl, GL_FRAGMENT_SHADER, fs));
   gl.BindAttribLocation(p, 0, "a_clip");
   gl.LinkProgram(p);
@@ -201,19 +248,48 @@ int main(int argc, char** argv) {
     vaos.push_back(vao);
   }
 
+  bool mrt = false, stencil = false, msaa = false;
+  for (const Draw& d : scene.draws) {
+    mrt = mrt || d.kind == "mrt";
+    stencil = stencil || d.stencil || d.stencil_always;
+    msaa = msaa || d.msaa;
+  }
   GLuint fbo = 0;
   if (scene.fbo) {
-    GLuint rb[2] = {};
+    // The second colour attachment and the stencil only where a draw needs them,
+    // so the other scenes' framebuffer stays RGBA8 + DEPTH24.
+    GLuint rb[3] = {};
     gl.GenFramebuffers(1, &fbo);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
-    gl.GenRenderbuffers(1, &rb[0]);
+    gl.GenRenderbuffers(3, rb);
     gl.BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
     gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, scene.width, scene.height);
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
-    gl.GenRenderbuffers(1, &rb[1]);
     gl.BindRenderbuffer(GL_RENDERBUFFER, rb[1]);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, scene.width, scene.height);
+    gl.RenderbufferStorage(GL_RENDERBUFFER, stencil ? GL_DEPTH24_STENCIL8 : GL_DEPTH_COMPONENT24, scene.width,
+                           scene.height);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, stencil ? GL_DEPTH_STENCIL_ATTACHMENT : GL_DEPTH_ATTACHMENT,
+                               GL_RENDERBUFFER, rb[1]);
+    if (mrt) {
+      gl.BindRenderbuffer(GL_RENDERBUFFER, rb[2]);
+      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, scene.width, scene.height);
+      gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER, rb[2]);
+    }
+    if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("incomplete framebuffer");
+  }
+  GLuint msaa_fbo = 0;
+  if (msaa) {
+    GLuint rb[2] = {};
+    gl.GenFramebuffers(1, &msaa_fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+    gl.GenRenderbuffers(2, rb);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, 4, GL_RGBA8, scene.width, scene.height);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, rb[1]);
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, 4, GL_DEPTH_COMPONENT24, scene.width, scene.height);
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("incomplete multisample framebuffer");
   }
   glViewport(0, 0, scene.width, scene.height);
   for (int frame = 0; frame < scene.frames; ++frame) {
@@ -221,7 +297,8 @@ int main(int argc, char** argv) {
     glClearColor(0, 0, 0, 0);
     glDepthMask(GL_TRUE);
     glClearDepth(1.0);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glClearStencil(0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | (stencil ? GL_STENCIL_BUFFER_BIT : 0));
     for (size_t i = 0; i < scene.draws.size(); ++i) {
       const Draw& d = scene.draws[i];
       if (d.depth == "off") {
@@ -240,6 +317,17 @@ int main(int argc, char** argv) {
         else glBlendFunc(GL_ONE, GL_ONE);
       }
       const GLsizei n = static_cast<GLsizei>(d.clip.size() / 4);
+      if (d.msaa) {
+        gl.BindFramebuffer(GL_FRAMEBUFFER, msaa_fbo);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      }
+      if (d.stencil || d.stencil_always) {
+        glEnable(GL_STENCIL_TEST);
+        glStencilFunc(d.stencil ? GL_EQUAL : GL_ALWAYS, 0, 0xFF);
+        glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+      }
+      const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+      if (d.kind == "mrt") gl.DrawBuffers(2, both);
       if (d.kind == "fixed") {
         gl.UseProgram(0);
         glColor4fv(d.colour);
@@ -254,6 +342,15 @@ int main(int argc, char** argv) {
         gl.BindVertexArray(vaos[i]);
         glDrawArrays(GL_TRIANGLES, 0, n);
         gl.BindVertexArray(0);
+      }
+      if (d.kind == "mrt") gl.DrawBuffers(1, both);
+      if (d.stencil || d.stencil_always) glDisable(GL_STENCIL_TEST);
+      if (d.msaa) {  // resolve into the frame's target
+        gl.BindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);
+        gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+        gl.BlitFramebuffer(0, 0, scene.width, scene.height, 0, 0, scene.width, scene.height, GL_COLOR_BUFFER_BIT,
+                           GL_NEAREST);
+        gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
       }
     }
     if (fbo) {

@@ -39,10 +39,10 @@ std::string firstLines(std::string log, size_t max_lines = 3) {
   return log;
 }
 
-// Compiles a fragment shader; returns 0 and fills log on failure.
-GLuint compileFragment(const std::string& src, std::string& log) {
+// Compiles a shader of `type`; returns 0 and fills log on failure.
+GLuint compileShader(GLenum type, const std::string& src, std::string& log) {
   RealGl& g = gl();
-  const GLuint s = g.glCreateShader(GL_FRAGMENT_SHADER);
+  const GLuint s = g.glCreateShader(type);
   const char* text = src.c_str();
   g.glShaderSource(s, 1, &text, nullptr);
   g.glCompileShader(s);
@@ -150,16 +150,30 @@ void Recorder::afterLink(GLuint program) {
          " after rewriting: " + firstLines(log));
   };
 
-  std::vector<GLuint> added;
+  std::vector<GLuint> added, replaced;  // shaders attached for the link; the application's taken off
   std::string log;
   if (si.es) {
-    const GLuint s = compileFragment(glsl::rewriteEs(source, si, colour, bindings, early), log);
+    const GLuint s = compileShader(GL_FRAGMENT_SHADER, glsl::rewriteEs(source, si, colour, bindings, early), log);
     if (!s) failure("does not compile", log);
     added.push_back(s);
+    // GLSL ES links only shaders of one version: the other stages go to 3.20 too.
+    for (GLuint other : shaders) {
+      if (other == main_shader) continue;
+      const std::string other_source = shaderSource(other);
+      const glsl::SourceInfo oi = glsl::inspect(other_source);
+      if (!oi.es || oi.version == 320) continue;
+      GLint type = 0;
+      g.glGetShaderiv(other, GL_SHADER_TYPE, &type);
+      const GLuint o = compileShader(static_cast<GLenum>(type), glsl::esStageAt320(other_source, oi), log);
+      if (!o) failure("does not compile (another stage at GLSL ES 3.20)", log);
+      g.glDetachShader(program, other);
+      replaced.push_back(other);
+      added.push_back(o);
+    }
   } else {
-    const GLuint a = compileFragment(glsl::rewriteDesktopMain(source, si, colour), log);
+    const GLuint a = compileShader(GL_FRAGMENT_SHADER, glsl::rewriteDesktopMain(source, si, colour), log);
     if (!a) failure("does not compile", log);
-    const GLuint b = compileFragment(glsl::desktopRecordUnit(bindings, early), log);
+    const GLuint b = compileShader(GL_FRAGMENT_SHADER, glsl::desktopRecordUnit(bindings, early), log);
     if (!b) failure("does not compile (record unit)", log);
     added = {a, b};
   }
@@ -181,6 +195,7 @@ void Recorder::afterLink(GLuint program) {
     g.glDeleteShader(s);
   }
   g.glAttachShader(program, main_shader);
+  for (GLuint s : replaced) g.glAttachShader(program, s);
   info.rewritten = true;
   info.reason = kCaptured;
   info.early_tests = early;

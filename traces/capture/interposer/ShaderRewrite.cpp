@@ -178,6 +178,25 @@ std::string desktopRecordUnit(const Bindings& b, bool early_tests) {
   return s + recordFunction(b, "");
 }
 
+namespace {
+
+// GLSL ES 1.00 texture functions under their 3.20 names.
+const char* kEs100TextureNames =
+    "#define texture2D texture\n#define texture2DProj textureProj\n"
+    "#define texture2DLod textureLod\n#define texture2DProjLod textureProjLod\n"
+    "#define textureCube texture\n#define textureCubeLod textureLod\n"
+    "#define texture2DLodEXT textureLod\n#define textureCubeLodEXT textureLod\n"
+    "#define texture2DGradEXT textureGrad\n";
+
+}  // namespace
+
+std::string esStageAt320(std::string_view source, const SourceInfo& info) {
+  std::string out = "#version 320 es\n";
+  if (info.version < 300) out += std::string("#define attribute in\n#define varying out\n") + kEs100TextureNames;
+  out.append(source.substr(info.after_version));
+  return out;
+}
+
 std::string rewriteEs(std::string_view source, const SourceInfo& info, const std::string& colour,
                       const Bindings& b, bool early_tests) {
   const std::string clean = withoutComments(source);
@@ -186,11 +205,7 @@ std::string rewriteEs(std::string_view source, const SourceInfo& info, const std
   std::string colour_expr = colour;
   if (info.version < 300) {
     // 1.00 names on 3.20 ones.
-    head += "#define varying in\n#define texture2D texture\n#define texture2DProj textureProj\n"
-            "#define texture2DLod textureLod\n#define texture2DProjLod textureProjLod\n"
-            "#define textureCube texture\n#define textureCubeLod textureLod\n"
-            "#define texture2DLodEXT textureLod\n#define textureCubeLodEXT textureLod\n"
-            "#define texture2DGradEXT textureGrad\n#define gl_FragDepthEXT gl_FragDepth\n";
+    head += std::string("#define varying in\n") + kEs100TextureNames + "#define gl_FragDepthEXT gl_FragDepth\n";
     if (info.uses_frag_data) {
       head += "#define gl_FragData oitsim_frag_data\n";
       decl += "layout(location = 0) out highp vec4 oitsim_frag_data[4];\n";

@@ -64,6 +64,12 @@ std::string desktopRecordUnit(const Bindings& b, bool early_tests);
 std::string rewriteEs(std::string_view source, const SourceInfo& info, const std::string& colour,
                       const Bindings& b, bool early_tests);
 
+// GLSL ES links only shaders of one version, so the program's other ES stages
+// (a vertex shader of 1.00, 3.00 or 3.10) are recompiled as `#version 320 es`
+// beside the rewritten fragment shader: the version line replaced, 1.00's
+// `attribute`/`varying` and texture functions named as 3.20 names them.
+std::string esStageAt320(std::string_view source, const SourceInfo& info);
+
 // Names of the uniforms the injected code declares (set with glProgramUniform*).
 inline constexpr const char* kUniformMode = "oitsim_mode";       // bits: 1 record, 2 count per pixel
 inline constexpr const char* kUniformDraw = "oitsim_draw";
