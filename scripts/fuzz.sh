@@ -32,7 +32,7 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 work="$build/fuzz"
 # The harnesses run side by side, OITSIM_JOBS (default: the cores) at a time:
 # each is one single-threaded process, and CI waits for them.
-jobs=${OITSIM_JOBS:-$(nproc)}
+parallel=${OITSIM_JOBS:-$(nproc)}
 run_one() {
   local h=$1 exe="$build/tests/fuzz/fuzz_$1" rc
   mkdir -p "$work/corpus/$h"
@@ -48,9 +48,9 @@ for h in "${harnesses[@]}"; do
   [ -x "$build/tests/fuzz/fuzz_$h" ] || { echo "fuzz.sh: no harness '$h' ($build/tests/fuzz/fuzz_$h)" >&2; exit 2; }
 done
 mkdir -p "$work"
-echo "== ${harnesses[*]}: ${seconds}s each, $jobs at a time"
+echo "== ${harnesses[*]}: ${seconds}s each, $parallel at a time"
 for h in "${harnesses[@]}"; do
-  while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+  while [ "$(jobs -rp | wc -l)" -ge "$parallel" ]; do wait -n || true; done
   rm -f "$work/$h.rc"
   run_one "$h" &
 done
