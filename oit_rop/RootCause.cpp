@@ -121,14 +121,12 @@ void RootCauseAccount::account(Cycle now) {
     // cause they were; a position order would charge tails to the last one).
     const WaitSplit w = withQueueEnds(w_);
     if (w.queue_end > at && w.queue_end > w.latency_end) {
-      const Cycle to = std::min(w.queue_end, now), len = to - at, all = w.queue_end - w.latency_end;
-      const uint64_t r = mulDiv(len, w.refresh_end - w.latency_end, all);
-      const uint64_t b = mulDiv(len, w.bank_end - w.refresh_end, all);
-      const uint64_t t = mulDiv(len, w.turn_end - w.bank_end, all);
-      cycles_[size_t(RootCause::DramRefresh)] += r;
-      cycles_[size_t(RootCause::DramBankConflict)] += b;
-      cycles_[size_t(RootCause::DramTurnaround)] += t;
-      cycles_[size_t(RootCause::DramBandwidth)] += len - r - b - t;
+      const Cycle to = std::min(w.queue_end, now);
+      const QueueSplit q = queueSplit(w_, at, to);  // [at, to) is queueing only (at >= latency_end or empty)
+      cycles_[size_t(RootCause::DramRefresh)] += q.refresh;
+      cycles_[size_t(RootCause::DramBankConflict)] += q.bank;
+      cycles_[size_t(RootCause::DramTurnaround)] += q.turnaround;
+      cycles_[size_t(RootCause::DramBandwidth)] += q.bandwidth;
       at = to;
     }
     charge(w_.dram_end, RootCause::DramBandwidth);

@@ -180,8 +180,7 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle loo
   sets_pow2_ = (sets_ & (sets_ - 1)) == 0;
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
-  line_count_ = size_t(cfg.slices) * sets_ * cfg.ways;
-  block_bytes_ = size_t(cfg.ways) * (2 * sizeof(uint64_t) + sizeof(Line));
+  block_bytes_ = size_t(cfg.ways) * kWayBytes;
   way_shift_ = unsigned(std::bit_width(cfg.ways - 1u));
   way_mask_ = (size_t(1) << way_shift_) - 1;
   store_.reset(static_cast<unsigned char*>(std::calloc(size_t(cfg.slices) * sets_, block_bytes_)));
@@ -197,7 +196,7 @@ uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classi
   if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0) return 0;
   const uint64_t lines = cfg.size_bytes / cfg.line_bytes;
   const uint64_t sets = lines / cfg.ways;
-  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * (2 * sizeof(uint64_t) + sizeof(Line)) + lines / 8;
+  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * kWayBytes + lines / 8;
   // The shadow per line it holds: its key, LRU links and sectors (20 B) and
   // two hash-table entries at half load (line -> slot, line -> sectors seen).
   constexpr uint64_t kShadowBytesPerLine = 96;

@@ -124,6 +124,8 @@ class CacheLevel final : public MemoryPort {
     Surface surface = Surface::BlendArrays;  // of its last writer (write-backs count by it)
   };
   static constexpr size_t kNoWay = ~size_t(0);
+  // A way's share of its set's block in the tag store: its tag, its stamp, its Line.
+  static constexpr size_t kWayBytes = 2 * sizeof(uint64_t) + sizeof(Line);
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
@@ -181,7 +183,6 @@ class CacheLevel final : public MemoryPort {
   size_t block_bytes_ = 0;  // ways x (tag + stamp + Line)
   unsigned way_shift_ = 0;  // log2 of ways rounded up to a power of two
   size_t way_mask_ = 0;
-  size_t line_count_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice
   uint64_t stamp_ = 0;

@@ -73,14 +73,10 @@ class PortCalendar {
 
  private:
   static constexpr uint32_t kFull = 1u << 16;  // one cycle of the port
-  void reserve(Cycle last) {  // the ring covers up to `last` (inline: a test per booked cycle)
-    if (last > base_ + mask_) grow(last);
-  }
   void grow(Cycle last);
   void bookFrom(Cycle c, uint64_t need, Cycle& start, Cycle& end);  // book()'s general case (need > 0)
   void advanceBase(Cycle base);  // base > base_
   void clearRange(std::size_t first, std::size_t n);  // the ring's slots [first, first + n), no wrap
-  uint32_t& slot(Cycle c) { return used_[c & mask_]; }
   bool full(Cycle c) const { return (full_[(c & mask_) >> 6] >> (c & 63)) & 1; }
   void setFull(Cycle c) { full_[(c & mask_) >> 6] |= uint64_t(1) << (c & 63); }
 
