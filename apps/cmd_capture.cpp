@@ -75,12 +75,7 @@ std::pair<uint32_t, uint32_t> parseFrameRange(const std::string& text) {
 // File of frame `frame` of the range: OUT itself for one frame, else OUT-FFFF.EXT
 // named by the frame's swap-buffer count.
 std::string rangeFileName(const std::string& output, uint32_t frame, uint32_t first, uint32_t last) {
-  if (first == last) return output;
-  const size_t slash = output.find_last_of('/');
-  const size_t dot = output.find_last_of('.');
-  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
-  const std::string stem = has_ext ? output.substr(0, dot) : output;
-  return fmt::format("{}-{:04d}{}", stem, frame, has_ext ? output.substr(dot) : "");
+  return capture::frameFileName(output, frame, last - first + 1);
 }
 
 void runApitraceCapture(const CaptureArgs& a) {

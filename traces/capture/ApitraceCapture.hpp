@@ -103,7 +103,4 @@ namespace oit::capture {
 // numbers as ranges), and notes on what the trace approximates.
 std::string frameSummary(const FrameCapture& f, const std::string& output);
 
-// Number of draws of the frame the trace cannot express (--strict refuses them).
-inline uint64_t uncapturedCount(const FrameCapture& f) { return f.uncaptured.size(); }
-
 }  // namespace oit::capture

@@ -19,6 +19,14 @@
 #include "traces/capture/interposer/BlendClass.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 
+// The stream's blend modes are the trace format's (oit::BlendMode), value for value.
+static_assert(uint8_t(oit::BlendMode::Off) == oit::capture::stream::kBlendOff &&
+              uint8_t(oit::BlendMode::Over) == oit::capture::stream::kBlendOver &&
+              uint8_t(oit::BlendMode::PremultipliedOver) == oit::capture::stream::kBlendPremulOver &&
+              uint8_t(oit::BlendMode::Additive) == oit::capture::stream::kBlendAdditive &&
+              uint8_t(oit::BlendMode::Multiplicative) == oit::capture::stream::kBlendMultiply &&
+              uint8_t(oit::BlendMode::Other) == oit::capture::stream::kBlendOther);
+
 namespace oit::capture {
 
 namespace st = stream;

@@ -32,7 +32,7 @@ std::string frameSummary(const FrameCapture& f, const std::string& output) {
   std::string s = fmt::format("frame {} -> {}: {} fragments, {} x {}, {} draw calls", f.frame, output,
                               f.fragments.size(), f.header.width, f.header.height, f.draw_calls);
   std::vector<std::string> modelled, unmodelled;
-  for (uint32_t m = 0; m < 6; ++m) {
+  for (uint32_t m = 0; m < f.draws_by_mode.size(); ++m) {
     if (!f.draws_by_mode[m]) continue;
     const std::string part =
         fmt::format("{} {} ({} fragments)", f.draws_by_mode[m], blendModeName(m), f.fragments_by_mode[m]);

@@ -20,9 +20,8 @@ constexpr GLenum kClampFragmentColor = 0x891B;  // GL_CLAMP_FRAGMENT_COLOR (comp
 void Recorder::ensureVerifyTarget() {
   RealGl& g = gl();
   if (verify_fb_ && verify_w_ == frame_w_ && verify_h_ == frame_h_) return;
-  GLint saved_tex = 0, saved_rb = 0, saved_fb = 0;
+  GLint saved_tex = 0, saved_fb = 0;
   g.glGetIntegerv(GL_TEXTURE_BINDING_2D, &saved_tex);
-  g.glGetIntegerv(GL_RENDERBUFFER_BINDING, &saved_rb);
   g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &saved_fb);
   if (!verify_fb_) {
     g.glGenFramebuffers(1, &verify_fb_);
@@ -43,7 +42,6 @@ void Recorder::ensureVerifyTarget() {
   g.glBufferData(GL_COPY_WRITE_BUFFER, static_cast<GLsizeiptr>(uint64_t(frame_w_) * frame_h_ * 4), nullptr,
                  GL_DYNAMIC_READ);
   g.glBindBuffer(GL_COPY_WRITE_BUFFER, static_cast<GLuint>(saved_buf));
-  g.glBindRenderbuffer(GL_RENDERBUFFER, static_cast<GLuint>(saved_rb));
   verify_w_ = frame_w_;
   verify_h_ = frame_h_;
   verify_used_ = false;
