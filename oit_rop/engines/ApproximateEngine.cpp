@@ -31,7 +31,7 @@ void ApproximateEngine::run() {
   constexpr size_t kLookahead = 8;  // records ahead whose lock entry is prefetched
   constexpr size_t kStages = 5;     // every stage but the resolve
   p.flushAccounts();  // every stage idle up to here; the timelines account the phase
-  const Cycle start = p.now_;
+  const Cycle start = p.now_;  // the phase's first cycle
   // Root causes (DESIGN.md "Root causes", approximate engine): the partition's
   // time moves from issue to issue. A span the input's rate decides is the
   // input's (the ALU's when its blends are booked beyond it); a span a full
@@ -309,13 +309,13 @@ void ApproximateEngine::run() {
       const bool culled_kind = kind >= 4;
       const model::InsertWork work = culled_kind ? model::InsertWork{0, 0} : p.charged(r.work, r.outcome);
       p.alu_.count(work, culled_kind);
-      const Cycle start = p.blendStart(at, appends[kind]);
-      const Cycle done = start + p.alu_.latency(work);
-      if (start > at) {
-        tl[4].addLeavingGap(acc[4], at, start, StageStatus::stall(Stall::AtomicWait));
-        shares.add(RootCause::Atomics, start - at);  // the A-buffer's node counter
+      const Cycle blend_start = p.blendStart(at, appends[kind]);
+      const Cycle done = blend_start + p.alu_.latency(work);
+      if (blend_start > at) {
+        tl[4].addLeavingGap(acc[4], at, blend_start, StageStatus::stall(Stall::AtomicWait));
+        shares.add(RootCause::Atomics, blend_start - at);  // the A-buffer's node counter
       }
-      tl[4].addLeavingGap(acc[4], start, done, kBusy);
+      tl[4].addLeavingGap(acc[4], blend_start, done, kBusy);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);

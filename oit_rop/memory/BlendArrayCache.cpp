@@ -121,8 +121,8 @@ bool BlendArrayCache::missQueueRefuses(Cycle now, uint32_t misses, uint32_t& bus
   // is nearly always busy (bench trace: 96 % of the entries), so this test
   // runs on most misses and on every refused retry.
   busy = 0;  // entries in flight before this access
-  if (miss_queue_max_ <= now) return false;
   const Cycle* const sorted = miss_sorted_.data() + sorted_head_;
+  if (sorted[cfg_.miss_queue - 1] <= now) return false;  // the latest entry is free: all are
   uint32_t free = 0;
   while (free < cfg_.miss_queue && sorted[free] <= now) ++free;
   busy = cfg_.miss_queue - free;
@@ -148,6 +148,14 @@ uint32_t BlendArrayCache::victimIn(uint32_t set) const {
       victim_stamp = lines_[w].stamp;
     }
   return victim;
+}
+
+Cycle BlendArrayCache::refuseBySet(uint32_t set) {
+  // Refused like a full miss queue: no state change (the caller undid its pins).
+  refused_by_set_ = true;
+  refused_set_ = set;
+  ++stats_.set_in_use;
+  return kNever;
 }
 
 Cycle BlendArrayCache::commitMiss(Cycle now, uint32_t tile, const LineTouch& t, uint32_t index, bool absent,
@@ -212,7 +220,6 @@ Cycle BlendArrayCache::commitMiss(Cycle now, uint32_t tile, const LineTouch& t, 
   while (miss_queue_[slot] > now) ++slot;
   replaceSorted(miss_queue_[slot], line.ready);
   miss_queue_[slot] = line.ready;
-  miss_queue_max_ = std::max(miss_queue_max_, line.ready);
   return line.ready;
 }
 
@@ -231,12 +238,7 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     if (absent) {
       const uint32_t set = (base_of_[tile] + t.line) % sets_;
       index = victimIn(set);
-      if (index == kInvalid) {
-        refused_by_set_ = true;
-        refused_set_ = set;
-        ++stats_.set_in_use;
-        return kNever;
-      }
+      if (index == kInvalid) return refuseBySet(set);
     }
     refused_by_set_ = false;
     // Pinned while its fill is booked (below the victim keeps the pins of its way).
@@ -275,10 +277,7 @@ Cycle BlendArrayCache::acquireSlow(Cycle now, uint32_t tile, std::span<const Lin
     if (victim == kInvalid) {
       for (uint32_t index : scratch_index_)  // the access's lines and the victims chosen so far
         if (index != kInvalid) --lines_[index & 0x7FFFFFFFu].pins;
-      refused_by_set_ = true;
-      refused_set_ = set;
-      ++stats_.set_in_use;  // refused like a full miss queue: no state change
-      return kNever;
+      return refuseBySet(set);
     }
     ++lines_[victim].pins;
     scratch_index_[i] = victim | 0x80000000u;  // marked: a victim for an absent line

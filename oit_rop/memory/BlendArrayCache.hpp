@@ -188,6 +188,7 @@ class BlendArrayCache {
   // entries in flight.
   bool missQueueRefuses(Cycle now, uint32_t misses, uint32_t& busy);
   uint32_t victimIn(uint32_t set) const;  // a way out of use for a new line, or kInvalid
+  Cycle refuseBySet(uint32_t set);        // no way of `set` out of use: kNever, counted (set_in_use)
   // A missing line (absent: into way `index`, evicting its line) filled, its
   // miss-queue entry taken (the first free from `slot` on); returns when it is there.
   Cycle commitMiss(Cycle now, uint32_t tile, const LineTouch& t, uint32_t index, bool absent, uint32_t& slot);
@@ -231,7 +232,6 @@ class BlendArrayCache {
   std::vector<Cycle> miss_queue_;    // per entry: cycle it frees (<= now: free)
   std::vector<Cycle> miss_sorted_;   // the same cycles, ascending: [sorted_head_, + miss_queue) of twice that
   size_t sorted_head_ = 0;
-  Cycle miss_queue_max_ = 0;         // the largest entry (an entry only ever grows)
   Cycle miss_queue_min_ = 0;         // after a refusal: when enough entries are free
   uint64_t stamp_ = 0;
   bool refused_by_set_ = false;
