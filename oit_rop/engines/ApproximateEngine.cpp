@@ -102,6 +102,10 @@ void ApproximateEngine::run() {
   LockStats ls = lock_stats_;
   uint64_t culled_early = 0, fragments = 0, depth_reads_needed = 0;
   Cycle last_release = p.now_, last_finish = p.now_;
+  // The latest issue: the calendars' time. The partition's time (p.now_, at
+  // which the memory side is asked) is at least that, and ahead of it while a
+  // miss the miss queue refused waits for an entry (below).
+  Cycle visit_now = p.now_;
   StageStatus gap0 = kBusy;  // stage 0 before the next issue: rate-limited (busy), starved or scoreboard full
   std::vector<Cycle> fill_ready(p.geo_.tiles(), 0);  // per tile: when its last fill arrives (fragment time)
   PortCalendar ed_exit(p.cfg_.input.fragments_per_clock, 0);  // its leaves at its rate, for fragments held
@@ -118,12 +122,14 @@ void ApproximateEngine::run() {
       in = q.cursor();
       if (in.empty()) {
         if (!p.starving_) throw std::logic_error(fmt::format("partition {}: input ended without its pass end", p.id_));
-        retireCalendars(p.now_);
+        retireCalendars(visit_now);
+        const Cycle wait_from = p.now_;
         p.waitForFrontEnd();
-        if (p.now_ > charged) p.root_.add(RootCause::InputStarvation, p.now_ - charged);
-        charged = std::max(charged, p.now_);
+        visit_now += p.now_ - wait_from;  // the wait in the visits' frame (the partition's time may lead it)
+        if (visit_now > charged) p.root_.add(RootCause::InputStarvation, visit_now - charged);
+        charged = std::max(charged, visit_now);
         in = q.cursor();
-        issue_fx = std::max(issue_fx, int64_t(p.now_) << kShift);
+        issue_fx = std::max(issue_fx, int64_t(visit_now) << kShift);
         gap0 = StageStatus::stall(Stall::InputStarved);
         continue;
       }
@@ -143,6 +149,7 @@ void ApproximateEngine::run() {
       q.setHead(in);
       retireCalendars(p.now_);
       if (last_release > p.now_) p.advance(last_release, false);
+      visit_now = p.now_;
       if (p.now_ > charged) shares.chargeTo(p.root_, p.now_ - charged, RootCause::PipelineLatency);
       shares.finish(p.root_);
       charged = std::max(charged, p.now_);
@@ -158,14 +165,14 @@ void ApproximateEngine::run() {
     }
     // Scoreboard entry: when every one is in use, the earliest release frees one.
     // The calendars retire lazily: only when the sampler may read them (before
-    // a yield), for a new peak, and here: releases at or before p.now_ (which
+    // a yield), for a new peak, and here: releases at or before visit_now (which
     // free nothing later than fx) are dropped a cycle at a time until the
     // scoreboard is not full or its earliest release is still in flight.
     int64_t fx = issue_fx;
     const Cycle by_rate = Cycle(issue_fx >> kShift);
     bool sb_delayed = false;  // a full scoreboard decided the issue
     while (scoreboard_.size() >= cap) {
-      if (scoreboard_.dropDue(p.now_)) continue;
+      if (scoreboard_.dropDue(visit_now)) continue;
       const int64_t freed = int64_t(scoreboard_.popEarliest()) << kShift;
       if (freed > fx) {
         fx = freed;
@@ -174,6 +181,7 @@ void ApproximateEngine::run() {
       }
     }
     const Cycle issue = Cycle(fx >> kShift);
+    visit_now = std::max(visit_now, issue);
     issue_fx = fx + in_step;
     if (issue > charged) {
       // Up to the input's slot: the input's (the ALU's where blends queue for
@@ -262,6 +270,13 @@ void ApproximateEngine::run() {
       // counts from the fragment's lock entry; a hit on a line whose fill was
       // in flight waits for that fill's own time (fill_ready), not shifted by
       // its lock wait, which already covered the older fragment that missed.
+      // A miss the miss queue refuses goes below when an entry frees
+      // (at_cache), and the partition's time moves there first: on a
+      // miss-queue-bound frame at_cache runs up to ~16 k cycles ahead of the
+      // issues, and booked there while the partitions' times stayed at their
+      // issues, the fills reached the l2 and DRAM out of time order (1,190
+      // cycles late on average) and took 394 cycles instead of the cycle
+      // engine's 244 (DESIGN.md, "The continuum paper's Titan X point").
       Cycle at_cache = issue;
       bool missed;
       p.memory_.resetProbe();
@@ -271,6 +286,14 @@ void ApproximateEngine::run() {
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
+        if (at_cache >= p.next_sync_) {  // p.advance() yields (as for an issue, above)
+          retireCalendars(visit_now);
+          q.setHead(in);
+          p.advance(at_cache, false);
+          in = q.cursor();
+        } else if (at_cache > p.now_) {
+          p.advance(at_cache, false);
+        }
         p.memory_.resetProbe();
         misses = p.cache_.stats().misses;
         got = p.cache_.touch(at_cache, tile, lines, missed);
@@ -323,7 +346,7 @@ void ApproximateEngine::run() {
     last_release = std::max(last_release, release);
     scoreboard_.push(release);
     if (scoreboard_.size() > ls.peak_occupancy) {  // perhaps a new peak: count only those in flight
-      scoreboard_.retire(p.now_);
+      scoreboard_.retire(visit_now);
       ls.peak_occupancy = std::max(ls.peak_occupancy, uint32_t(scoreboard_.size()));
     }
     in.pop();
