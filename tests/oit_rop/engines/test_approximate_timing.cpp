@@ -263,15 +263,23 @@ TEST(ApproximateTiming, CloseToTheCycleEngine) {
   ASSERT_TRUE(c.ok && a.ok) << c.error << a.error;
   EXPECT_TRUE(sameBits(a.image, c.image));
   const auto &cs = c.stats, &as = a.stats;
-  // Measured: frame +1.08 % (3,530,302 against 3,492,697 cycles), lock
-  // conflicts -51.3 % (2,899 against 5,948). Before the in-order early depth
-  // (InOrderBlockers) they were -18.5 % and the frame +0.73 %: not analysed
-  // further. Misses and blend-array bytes within 2 % as before. (Before the
-  // memory side worked in the visit's frame, session 9: frame +9.3 %.)
+  // Measured: frame +0.14 % (3,497,650 against 3,492,697 cycles; +1.08 %
+  // before issue 22 s5 booked the refused misses in time order). Misses and
+  // blend-array bytes within 2 % as before. (Before the memory side worked in
+  // the visit's frame, session 9: frame +9.3 %.)
   EXPECT_LT(rel(as["timing"]["cycles"], cs["timing"]["cycles"]), 0.03);
   EXPECT_LT(rel(as["cache"]["misses"], cs["cache"]["misses"]), 0.02);
   EXPECT_LT(rel(as["memory"]["dram_read_bytes"]["blend_arrays"], cs["memory"]["dram_read_bytes"]["blend_arrays"]), 0.02);
-  EXPECT_LT(rel(as["lock"]["conflicts"], cs["lock"]["conflicts"]), 0.6);
+  // Lock conflicts: 2,863 against 5,948, and no tolerance is claimed for
+  // them (DESIGN.md, "Lock conflicts"): the cycle engine's cache port is in
+  // order, so on this DRAM-bound frame its fragments wait 5,233 cycles on
+  // average between lock admission and the port (behind refused misses and
+  // the fills ahead of them), in flight meanwhile; the approximate engine's
+  // reach the port 22 cycles after it. A younger fragment of the pixel that
+  // arrives meanwhile conflicts in the cycle engine only, so the approximate
+  // engine counts no more. Where nothing waits at the port the two agree:
+  // test_approximate_lock_conflicts.cpp.
+  EXPECT_LE(as["lock"]["conflicts"].get<uint64_t>(), cs["lock"]["conflicts"].get<uint64_t>());
 }
 
 // Bound by depth-read latency: no HiZ (every fragment reads its depth tile),
