@@ -87,6 +87,16 @@ testing::AssertionResult usedIs(const PortCalendar& p, Cycle first, Cycle last, 
     if (p.used(c) != expect) return testing::AssertionFailure() << "used(" << c << ") = " << p.used(c) << ", expected " << expect;
   return testing::AssertionSuccess();
 }
+// Makes the ring of a 1 B/clock, lookback-0 calendar cover [base, base + 1024)
+// (base < 1024) with every slot booked: the whole ring booked from cycle 0,
+// the cycles before `base` retired, the freed ones booked again.
+void fillRingFrom(PortCalendar& p, Cycle base) {
+  Cycle s, e;
+  p.book(0, 1024, s, e);
+  p.retireBefore(base);
+  p.book(1024, uint32_t(base), s, e);
+  EXPECT_EQ(e, base + 1024);
+}
 }  // namespace
 
 TEST(PortCalendar, RetiringAcrossBitmapWordsFreesExactlyTheRetiredSlots) {
@@ -112,11 +122,8 @@ TEST(PortCalendar, RetiringAcrossBitmapWordsFreesExactlyTheRetiredSlots) {
 
 TEST(PortCalendar, RetiringAcrossTheRingsEndClearsBothRanges) {
   PortCalendar p(1.0, 0);
+  fillRingFrom(p, 1000);  // the ring [1000, 2024), every slot booked
   Cycle s, e;
-  p.book(0, 1024, s, e);
-  p.retireBefore(1000);
-  p.book(1024, 1000, s, e);  // the ring [1000, 2024) full again: every slot booked
-  ASSERT_EQ(e, 2024u);
   // Cycles 1000..1099 leave: slots 1000..1023 (bits 40..63 of word 15, up to
   // the ring's end) and, wrapped, slots 0..75 (word 0 whole, bits 0..11 of
   // word 1). The ring covers 1100..2123: 1100..2023 stay booked; 2024..2047
@@ -133,11 +140,8 @@ TEST(PortCalendar, RetiringAcrossTheRingsEndClearsBothRanges) {
 
 TEST(PortCalendar, RetiringMoreThanTheRingFreesEverySlot) {
   PortCalendar p(1.0, 0);
+  fillRingFrom(p, 700);  // [700, 1724) full
   Cycle s, e;
-  p.book(0, 1024, s, e);
-  p.retireBefore(700);
-  p.book(1024, 700, s, e);  // [700, 1724) full
-  ASSERT_EQ(e, 1724u);
   // 700 -> 3000: 2300 cycles leave, more than the ring's 1024: every slot
   // cleared; the ring covers 3000..4023, all free.
   p.retireBefore(3000);
