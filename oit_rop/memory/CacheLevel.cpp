@@ -265,7 +265,7 @@ size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
   return victim;
 }
 
-void CacheLevel::sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {
+void CacheLevel::partSectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {
   const uint64_t b = std::max(addr, line_addr), e = std::min(addr + bytes, line_addr + cfg_.line_bytes);
   any = whole = 0;
   for (uint64_t s = (b - line_addr) / sector_bytes_; s * sector_bytes_ < e - line_addr; ++s) {
@@ -306,10 +306,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     const uint64_t line_addr = line * cfg_.line_bytes;
     const uint64_t b = std::max(addr, line_addr), e = std::min(addr + bytes, line_addr + cfg_.line_bytes);
     uint32_t any, whole;
-    if (b == line_addr && e == line_addr + cfg_.line_bytes) [[likely]]  // a whole line (a line-sized fill or write-back)
-      any = whole = all_sectors_;
-    else
-      sectorsOf(line_addr, addr, bytes, any, whole);
+    sectorsOf(line_addr, addr, bytes, any, whole);
     unsigned slice;
     const size_t set = setOfLine(line, slice);
     Cycle moved;

@@ -159,8 +159,16 @@ class CacheLevel final : public MemoryPort {
     return start;
   }
   // Sectors of the line holding [addr, addr + bytes) that the range covers at
-  // all / covers wholly.
-  void sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const;
+  // all / covers wholly. Inline: most accesses are a whole line (a line-sized
+  // fill or write-back), the rest a sector loop (partSectorsOf).
+  void sectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {
+    if (addr <= line_addr && addr + bytes >= line_addr + cfg_.line_bytes) [[likely]] {
+      any = whole = all_sectors_;
+      return;
+    }
+    partSectorsOf(line_addr, addr, bytes, any, whole);
+  }
+  void partSectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const;
   // Reads the sectors `mask` of `line` from the level below (a run per
   // contiguous group); returns their completion.
   Cycle fetch(Cycle at, uint64_t line, uint32_t mask, Surface s);

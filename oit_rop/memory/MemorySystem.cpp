@@ -183,15 +183,21 @@ void addToBlocks(std::vector<uint64_t>& blocks, uint64_t from, uint64_t len, uns
     at += part;
   }
 }
-// The ticks of per-block totals over [from, to), each block's taken as spread over it.
-uint64_t blockTicks(const std::vector<uint64_t>& blocks, uint64_t from, uint64_t to, unsigned shift) {
+// Per-block totals (blocks of 2^shift units) summed over [from, to), to >
+// from, each block's total taken as spread evenly over it: a block the span
+// overlaps in part counts by the overlap.
+double spreadSum(const std::vector<uint64_t>& blocks, uint64_t from, uint64_t to, unsigned shift) {
   double sum = 0.0;
   const double size = double(uint64_t(1) << shift);
   for (uint64_t b = from >> shift; b <= (to - 1) >> shift && b < blocks.size(); ++b) {
     const uint64_t lo = std::max(from, b << shift), hi = std::min(to, (b + 1) << shift);
     sum += double(blocks[b]) * double(hi - lo) / size;
   }
-  return uint64_t(sum + 0.5);
+  return sum;
+}
+// The ticks of per-block totals over [from, to) (ticks; to > from).
+uint64_t blockTicks(const std::vector<uint64_t>& blocks, uint64_t from, uint64_t to, unsigned shift) {
+  return uint64_t(spreadSum(blocks, from, to, shift) + 0.5);
 }
 }  // namespace
 
@@ -251,14 +257,10 @@ void MemorySystem::addBusy(uint64_t from_tick, uint64_t len) {
 
 double MemorySystem::busShare(Cycle from, Cycle to) const {
   if (to <= from) return 0.0;
-  // Whole blocks overlapping the span, weighted by the overlap.
-  const uint64_t block_cycles = uint64_t(1) << kBusyBlockShift;
-  double busy = 0.0;
-  for (Cycle b = from >> kBusyBlockShift; b <= (to - 1) >> kBusyBlockShift; ++b) {
-    const Cycle lo = std::max<Cycle>(from, b << kBusyBlockShift), hi = std::min<Cycle>(to, (b + 1) << kBusyBlockShift);
-    const double ticks = b < busy_blocks_.size() ? double(busy_blocks_[b]) : 0.0;
-    busy += ticks / double(uint64_t(1) << kTickShift) * double(hi - lo) / double(block_cycles);
-  }
+  // Each block holds the bus ticks booked in its 2^kBusyBlockShift cycles:
+  // spread over the span in cycles, the sum is in ticks; / 2^kTickShift, in
+  // cycles (a power of two: the same double as scaling each block's part).
+  const double busy = spreadSum(busy_blocks_, from, to, kBusyBlockShift) / double(uint64_t(1) << kTickShift);
   return std::min(1.0, busy / (double(to - from) * double(channels_.size())));
 }
 

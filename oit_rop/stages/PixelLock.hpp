@@ -218,7 +218,13 @@ inline void PixelLock::unlink(Cycle now, uint32_t t) {
   // t stood between two fragments of one owner, the older at the front).
   if (n < 0 || tok_[size_t(n)].front) return;
   const uint32_t o = tok_[size_t(n)].owner;
-  if (p >= 0 && !(tok_[size_t(p)].front & (tok_[size_t(p)].owner == o))) return;
+  if (p >= 0) {
+    // Bitwise & on purpose (no branch between two fields of one token, as in
+    // allocate()); through a reference, not tok_[p] twice, whose call clang
+    // takes for a side effect that && would skip (-Wbitwise-instead-of-logical).
+    const Token& older = tok_[size_t(p)];
+    if (!(older.front & (older.owner == o))) return;
+  }
   for (int32_t i = n; i >= 0 && tok_[size_t(i)].owner == o; i = tok_[size_t(i)].next) {
     Token& f = tok_[size_t(i)];
     f.front = true;

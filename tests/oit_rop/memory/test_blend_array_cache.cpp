@@ -1,5 +1,7 @@
 // Blending-array tile cache: hit rates, victims, DRAM bytes and latencies
-// computed by hand (policies in oit_rop/memory/MEMORY.md).
+// computed by hand (policies in oit_rop/memory/MEMORY.md). Against a plain
+// reference on random streams: test_blend_array_cache_reference.cpp; lines
+// apart from tiles and sectors: test_blend_array_cache_sectors.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,63 +11,13 @@
 
 #include "oit_rop/TestLcg.hpp"
 #include "oit_rop/memory/BlendArrayCache.hpp"
+#include "oit_rop/memory/BlendArrayCacheTestUtil.hpp"
 #include "oit_rop/memory/DramSystem.hpp"
 
 namespace oit::rop {
 namespace {
 
-constexpr uint32_t kLine = 256;  // bytes per tile line in these tests
-
-// Whole-cycle DRAM: 1000 MHz core, tCK 1 ns, 16 B/cycle; controller 40,
-// CL = tRCD = tRP = 11. A 256 B line is 16 bus cycles; an unloaded line read
-// on a closed bank takes 40 + 11 + 11 + 16 = 78 cycles.
-DramConfig roundDram(unsigned channels = 1) {
-  DramConfig c;
-  c.channels = channels;
-  c.channel_gbps = 16.0;
-  c.tck_ns = 1.0;
-  c.cl = c.trcd = c.trp = 11;
-  c.controller_ns = 40.0;
-  return c;
-}
-constexpr double kMhz = 1000.0;
-
-CacheConfig cacheOf(uint32_t lines, unsigned ways, unsigned miss_queue = 16, unsigned hit_latency = 10) {
-  CacheConfig c;
-  c.size_bytes = uint64_t(lines) * kLine;
-  c.ways = ways;
-  c.miss_queue = miss_queue;
-  c.hit_latency = hit_latency;
-  return c;
-}
-
-// Most tests use one line per tile (the old tile-sized lines): a tile's
-// arrays are one line of `bytes`, read whole and, for a write, written whole.
-TileLines oneLine(uint32_t bytes = kLine) { return {bytes, bytes, 1}; }
-constexpr LineTouch kReadLine{0, 1, 0}, kWriteLine{0, 1, 1};
-std::span<const LineTouch> whole(bool write) { return {write ? &kWriteLine : &kReadLine, 1}; }
-Cycle acquire(BlendArrayCache& cache, Cycle now, uint32_t tile, bool write) {
-  return cache.acquire(now, tile, whole(write));
-}
-bool release(BlendArrayCache& cache, uint32_t tile) { return cache.release(tile, whole(false)); }
-
-// One access whose use ends at once (acquire, then release when accepted):
-// for the tests of LRU, fills and the miss queue, where no line stays in use.
-// (Lines in use are the subject of the LinesInUse tests below.)
-Cycle use(BlendArrayCache& cache, Cycle now, uint32_t tile, bool write) {
-  const Cycle t = acquire(cache, now, tile, write);
-  if (t != kNever) release(cache, tile);
-  return t;
-}
-
-// Acquire like a pipeline would: on kNever, retry one cycle later.
-Cycle acquireRetrying(BlendArrayCache& cache, Cycle& now, uint32_t tile, bool write) {
-  for (;;) {
-    const Cycle t = use(cache, now, tile, write);
-    if (t != kNever) return t;
-    ++now;
-  }
-}
+using namespace cache_testutil;
 
 TEST(BlendArrayCache, Geometry) {
   MemorySystem mem(roundDram(), kMhz);
@@ -307,193 +259,6 @@ TEST(BlendArrayCache, HitUnderMissWaitsForTheFillAndCountsAsHit) {
   EXPECT_EQ(mem.stats().readBytes(), kLine);  // no second fill
 }
 
-// Reference: the policies of MEMORY.md written out plainly (tag search over the
-// set, miss queue as a list of free-at cycles, first invalid way else the
-// smallest LRU stamp), driving its own MemorySystem.
-class ReferenceCache {
- public:
-  ReferenceCache(const CacheConfig& cfg, uint32_t line_bytes, uint32_t tiles, uint64_t base, MemorySystem& mem,
-                 bool fast_clear)
-      : cfg_(cfg), line_bytes_(line_bytes), base_(base), mem_(mem), fast_clear_(fast_clear), touched_(tiles, false) {
-    const uint64_t lines = cfg.size_bytes / line_bytes;
-    ways_ = uint32_t(std::min<uint64_t>(cfg.ways, lines));
-    sets_ = uint32_t(lines / ways_);
-    lines_.assign(size_t(sets_) * ways_, Line{});
-    queue_.assign(cfg.miss_queue, 0);
-  }
-
-  Cycle acquire(Cycle now, uint32_t tile, bool write) {
-    Line* set = &lines_[size_t(tile % sets_) * ways_];
-    for (uint32_t w = 0; w < ways_; ++w) {
-      Line& l = set[w];
-      if (!l.valid || l.tile != tile) continue;
-      ++stats.accesses;
-      ++stats.hits;
-      l.used = ++clock_;
-      if (write) l.dirty = touched_[tile] = true;
-      if (l.ready > now + cfg_.hit_latency) {
-        ++stats.hits_under_miss;
-        return l.ready;
-      }
-      return now + cfg_.hit_latency;
-    }
-    int free_entry = -1;
-    uint32_t busy = 0;
-    for (size_t i = 0; i < queue_.size(); ++i) {
-      if (queue_[i] > now)
-        ++busy;
-      else if (free_entry < 0)
-        free_entry = int(i);
-    }
-    if (free_entry < 0) {
-      ++stats.miss_queue_full;
-      return kNever;
-    }
-    ++stats.accesses;
-    ++stats.misses;
-    Line* victim = nullptr;
-    for (uint32_t w = 0; w < ways_ && !victim; ++w)
-      if (!set[w].valid) victim = &set[w];
-    if (!victim) {
-      victim = &set[0];
-      for (uint32_t w = 1; w < ways_; ++w)
-        if (set[w].used < victim->used) victim = &set[w];
-    }
-    Cycle ready = now + cfg_.hit_latency;
-    if (victim->valid) {
-      ++stats.evictions;
-      if (victim->dirty) {
-        ++stats.writebacks;
-        ready = std::max(ready, mem_.access(now, base_ + uint64_t(victim->tile) * line_bytes_, line_bytes_, true,
-                                            Surface::BlendArrays));
-      }
-    }
-    if (fast_clear_ && !touched_[tile])
-      ++stats.clear_fills;
-    else
-      ready = std::max(ready, mem_.access(now, base_ + uint64_t(tile) * line_bytes_, line_bytes_, false,
-                                          Surface::BlendArrays));
-    *victim = Line{true, tile, write, ++clock_, ready};
-    if (write) touched_[tile] = true;
-    queue_[size_t(free_entry)] = ready;
-    stats.peak_misses_in_flight = std::max(stats.peak_misses_in_flight, busy + (ready > now ? 1u : 0u));
-    return ready;
-  }
-  bool resident(uint32_t tile) const {
-    const Line* set = &lines_[size_t(tile % sets_) * ways_];
-    for (uint32_t w = 0; w < ways_; ++w)
-      if (set[w].valid && set[w].tile == tile) return true;
-    return false;
-  }
-  uint32_t inFlight(Cycle now) const {
-    return uint32_t(std::count_if(queue_.begin(), queue_.end(), [now](Cycle c) { return c > now; }));
-  }
-
-  CacheStats stats;
-
- private:
-  struct Line {
-    bool valid = false;
-    uint32_t tile = 0;
-    bool dirty = false;
-    uint64_t used = 0;
-    Cycle ready = 0;
-  };
-  CacheConfig cfg_;
-  uint32_t line_bytes_, ways_, sets_;
-  uint64_t base_;
-  MemorySystem& mem_;
-  bool fast_clear_;
-  std::vector<bool> touched_;
-  std::vector<Line> lines_;
-  std::vector<Cycle> queue_;
-  uint64_t clock_ = 0;
-};
-
-// Seeded random acquire streams (repeated tiles, a working set larger than the
-// cache, reads and writes, time mostly forward but sometimes back, retries
-// after refusals) over power-of-two and odd geometries: every returned cycle,
-// every stats field, the DRAM traffic, residency and the miss queue equal the
-// reference's.
-TEST(BlendArrayCache, MatchesReferenceOnRandomStreams) {
-  struct Shape {
-    uint32_t lines;
-    unsigned ways, miss_queue, hit_latency;
-    uint32_t tiles;
-  };
-  const Shape shapes[] = {
-      {64, 8, 16, 10, 512},  // igpu-like: 8 sets of 8
-      {24, 8, 5, 3, 200},    // 3 sets
-      {10, 4, 2, 10, 64},    // 2 sets, 2 lines dropped
-      {3, 8, 1, 1, 16},      // one fully associative set of 3, one miss entry
-      {1, 1, 3, 0, 8},       // one line, zero hit latency
-      {7, 1, 4, 80, 100},    // direct mapped, 7 sets
-      {32, 16, 32, 80, 4000} // dgpu-like
-  };
-  testutil::TestLcg rnd{12345, 21};
-  int cases = 0;
-  for (const Shape& sh : shapes) {
-    for (bool fast_clear : {false, true}) {
-      DramConfig d = roundDram(1 + cases % 3);
-      MemorySystem mem(d, kMhz), ref_mem(d, kMhz);
-      DramPort port(mem);
-      const CacheConfig cfg = cacheOf(sh.lines, sh.ways, sh.miss_queue, sh.hit_latency);
-      const uint64_t base = uint64_t(cases) << 20;
-      BlendArrayCache cache(cfg, oneLine(), sh.tiles, base, port, fast_clear);
-      ReferenceCache ref(cfg, kLine, sh.tiles, base, ref_mem, fast_clear);
-      const std::string what = std::to_string(sh.lines) + " lines " + std::to_string(sh.ways) + " ways mq " +
-                               std::to_string(sh.miss_queue) + (fast_clear ? " fast clear" : "");
-      Cycle now = 0;
-      uint32_t tile = 0;
-      uint64_t refused = 0;
-      for (int i = 0; i < 20000; ++i) {
-        const uint64_t r = rnd(16);
-        if (r < 8) {
-          // same tile again
-        } else if (r < 12) {
-          tile = uint32_t(rnd(std::min<uint32_t>(sh.tiles, sh.lines * 2)));  // a hot working set
-        } else {
-          tile = uint32_t(rnd(sh.tiles));
-        }
-        const bool write = rnd(3) != 0;
-        const Cycle at = rnd(50) == 0 ? now - std::min<Cycle>(now, rnd(300)) : now;
-        const Cycle want = ref.acquire(at, tile, write);
-        ASSERT_EQ(use(cache, at, tile, write), want) << what << ", acquire " << i;
-        refused += want == kNever;
-        now += rnd(3);
-        if (rnd(64) == 0) now += rnd(500);
-      }
-      const CacheStats& a = cache.stats();
-      const CacheStats& b = ref.stats;
-      EXPECT_EQ(a.accesses, b.accesses) << what;
-      EXPECT_EQ(a.hits, b.hits) << what;
-      EXPECT_EQ(a.misses, b.misses) << what;
-      EXPECT_EQ(a.clear_fills, b.clear_fills) << what;
-      EXPECT_EQ(a.evictions, b.evictions) << what;
-      EXPECT_EQ(a.writebacks, b.writebacks) << what;
-      EXPECT_EQ(a.miss_queue_full, b.miss_queue_full) << what;
-      EXPECT_EQ(a.peak_misses_in_flight, b.peak_misses_in_flight) << what;
-      EXPECT_EQ(a.hits_under_miss, b.hits_under_miss) << what;
-      EXPECT_EQ(mem.stats().readBytes(), ref_mem.stats().readBytes()) << what;
-      EXPECT_EQ(mem.stats().writeBytes(), ref_mem.stats().writeBytes()) << what;
-      EXPECT_EQ(mem.stats().last_completion, ref_mem.stats().last_completion) << what;
-      for (uint32_t t = 0; t < sh.tiles; ++t) ASSERT_EQ(cache.resident(t), ref.resident(t)) << what << " tile " << t;
-      for (Cycle c : {Cycle(0), now / 2, now, now + 100, now + 1000})
-        EXPECT_EQ(cache.missesInFlight(c), ref.inFlight(c)) << what;
-      // The streams do reach the cases that matter.
-      EXPECT_EQ(refused, a.miss_queue_full) << what;
-      EXPECT_GT(a.hits, 0u) << what;
-      EXPECT_GT(a.evictions, 0u) << what;
-      EXPECT_GT(a.hits_under_miss, 0u) << what;
-      if (sh.miss_queue <= 5) {
-        EXPECT_GT(a.miss_queue_full, 0u) << what;
-      }
-      ++cases;
-    }
-  }
-  EXPECT_EQ(cases, 14);
-}
-
 // Victim choice pinned by hand: the first invalid way even when a valid way is
 // older, then the least recently used; hits refresh the LRU order.
 TEST(BlendArrayCache, FirstInvalidWayThenLeastRecentlyUsed) {
@@ -581,7 +346,6 @@ TEST(BlendArrayCache, Deterministic) {
   EXPECT_GT(a.writebacks, 0u);
 }
 
-
 // An exactly fitting cache (128 KiB of 2 KiB lines: 64 lines, 8 ways, 8 sets)
 // over a 64x64 frame of 8x8 tiles (64 tiles) in raster order, two layers: every
 // tile misses once (set = tile % 8 = tile column; 8 tiles per set), the
@@ -602,7 +366,6 @@ TEST(BlendArrayCache, ExactlyFittingCacheMissesEachTileOnceInRasterOrder) {
   EXPECT_EQ(cache.stats().hits, 2u * 64 * 64 - 64);
   EXPECT_EQ(cache.stats().evictions, 0u);
 }
-
 
 // A line in use (acquired, release() not yet called: its fill is in flight or
 // its blend has not written it) is never a victim. Audit: the victim used to be
@@ -695,6 +458,7 @@ TEST(BlendArrayCache, MissesInFlightNeverExceedTheLines) {
   EXPECT_GT(cache.stats().set_in_use, 0u);
   EXPECT_EQ(cache.stats().accesses, 60u);
 }
+
 // The set comes from set_index when given (a partition's own tile numbers):
 // tiles 1, 3, 5, 7 in a 2-set, 2-way cache all map to set 1 by the tile number
 // (4 tiles in 2 ways: a cyclic sweep always misses) and to sets 0, 1, 0, 1 by
@@ -716,242 +480,6 @@ TEST(BlendArrayCache, SetIndexChoosesTheSet) {
   MemorySystem mem(roundDram(), kMhz);
   DramPort port(mem);
   EXPECT_THROW(BlendArrayCache(cacheOf(4, 2), oneLine(), 8, 0, port, false, {0, 1}), std::invalid_argument);
-}
-
-// ---- Lines apart from tiles: several lines per tile, sectors ----------------
-
-// Tiles of 4 lines of 128 B, sectors of 32 B (4 per line): a DRAM that
-// records every request.
-struct Recorder : MemoryPort {
-  struct Req {
-    uint64_t addr;
-    uint32_t bytes;
-    bool write;
-  };
-  std::vector<Req> reqs;
-  Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface) override {
-    reqs.push_back({addr, bytes, write});
-    return now + 50;
-  }
-};
-constexpr TileLines kSectored{128, 32, 4};
-
-CacheConfig sectoredCache(uint32_t lines, unsigned ways, unsigned miss_queue = 16) {
-  CacheConfig c;
-  c.size_bytes = uint64_t(lines) * 128;
-  c.ways = ways;
-  c.miss_queue = miss_queue;
-  c.hit_latency = 10;
-  return c;
-}
-
-TEST(BlendArrayCacheLines, AMissFillsOnlyTheSectorsItReadsAndWritesBackOnlyDirtyOnes) {
-  Recorder below;
-  BlendArrayCache cache(sectoredCache(8, 2), kSectored, 16, 0, below, false);
-  // Tile 1, line 2 (address (1 x 4 + 2) x 128 = 768): read sector 1, write sectors 1 and 2 (2 wholly).
-  const LineTouch t{2, 0b0010, 0b0110};
-  EXPECT_EQ(cache.acquire(0, 1, std::span(&t, 1)), 50u);  // one 32 B fill at 768 + 32
-  ASSERT_EQ(below.reqs.size(), 1u);
-  EXPECT_EQ(below.reqs[0].addr, 800u);
-  EXPECT_EQ(below.reqs[0].bytes, 32u);
-  cache.release(1, std::span(&t, 1));
-  EXPECT_EQ(cache.writtenSectors(1, 2), 0b0110u);
-  EXPECT_EQ(cache.writtenBytes(), 64u);
-  // Sector 3 is not held: a sector miss, another 32 B fill.
-  const LineTouch u{2, 0b1000, 0};
-  EXPECT_EQ(cache.acquire(100, 1, std::span(&u, 1)), 150u);
-  cache.release(1, std::span(&u, 1));
-  EXPECT_EQ(cache.stats().sector_misses, 1u);
-  EXPECT_EQ(cache.stats().misses, 2u);
-  // The dirty sectors 1 and 2 leave as one 64 B write when the line is evicted:
-  // it is line 6 (tile 1 x 4 + 2), set 6 mod 4 = 2, which tiles 2 and 3's
-  // line 2 (lines 10 and 14) share; the second of them evicts it (LRU).
-  const LineTouch r{2, 0b0001, 0};
-  for (uint32_t tile : {2u, 3u}) {
-    ASSERT_NE(cache.acquire(200 + tile, tile, std::span(&r, 1)), kNever);
-    cache.release(tile, std::span(&r, 1));
-  }
-  std::vector<Recorder::Req> writes;
-  for (const auto& q : below.reqs)
-    if (q.write) writes.push_back(q);
-  ASSERT_EQ(writes.size(), 1u);
-  EXPECT_EQ(writes[0].addr, 800u);
-  EXPECT_EQ(writes[0].bytes, 64u);
-  EXPECT_EQ(cache.stats().writeback_bytes, 64u);
-}
-
-TEST(BlendArrayCacheLines, FastClearIsPerSector) {
-  Recorder below;
-  BlendArrayCache cache(sectoredCache(4, 1), kSectored, 16, 0, below, true);  // direct mapped, 4 sets
-  const LineTouch w{0, 0b0001, 0b0001};  // tile 0 line 0: read-modify-write sector 0
-  EXPECT_EQ(cache.acquire(0, 0, std::span(&w, 1)), 10u);  // never written: a clear fill
-  cache.release(0, std::span(&w, 1));
-  const LineTouch e{0, 0b0001, 0};
-  EXPECT_NE(cache.acquire(20, 1, std::span(&e, 1)), kNever);  // tile 1's line 0 shares set 0: evicts it
-  cache.release(1, std::span(&e, 1));
-  ASSERT_EQ(below.reqs.size(), 1u);  // the write-back of sector 0
-  // Back to tile 0: sector 1 was never written (clear, no read); sector 0 comes from below.
-  const LineTouch s1{0, 0b0010, 0};
-  EXPECT_EQ(cache.acquire(40, 0, std::span(&s1, 1)), 50u);
-  cache.release(0, std::span(&s1, 1));
-  EXPECT_EQ(below.reqs.size(), 1u);
-  const LineTouch s0{0, 0b0001, 0};
-  EXPECT_EQ(cache.acquire(60, 0, std::span(&s0, 1)), 110u);
-  cache.release(0, std::span(&s0, 1));
-  ASSERT_EQ(below.reqs.size(), 2u);
-  EXPECT_FALSE(below.reqs[1].write);
-  EXPECT_EQ(below.reqs[1].addr, 0u);
-  EXPECT_EQ(below.reqs[1].bytes, 32u);
-  EXPECT_EQ(cache.stats().clear_fills, 3u);  // the first fill, tile 1's, and sector 1's
-}
-
-TEST(BlendArrayCacheLines, ARefusedAccessWaitsForTheEntryThatFreesItsLastNeededOne) {
-  // Three entries busy until 50, 55 and 70 (fills of 50 cycles from 0, 5 and
-  // 20): an access of k missing lines is refused until the k-th earliest
-  // frees, whatever order the entries were taken in, also for an access at an
-  // earlier cycle than the last one (the approximate engine retries later).
-  Recorder below;
-  BlendArrayCache cache(sectoredCache(16, 4, /*miss_queue=*/3), kSectored, 16, 0, below, false);
-  const LineTouch one{0, 0b1111, 0};
-  const LineTouch line1{1, 0b1111, 0};
-  const LineTouch two[2] = {{0, 0b1111, 0}, {1, 0b1111, 0}};
-  const LineTouch three[3] = {{0, 0b1111, 0}, {1, 0b1111, 0}, {2, 0b1111, 0}};
-  EXPECT_EQ(cache.acquire(20, 2, std::span(&one, 1)), 70u);
-  EXPECT_EQ(cache.acquire(0, 0, std::span(&one, 1)), 50u);
-  EXPECT_EQ(cache.acquire(5, 1, std::span(&one, 1)), 55u);
-  EXPECT_EQ(cache.acquire(30, 3, two), kNever);  // no entry free: the second earliest
-  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
-  EXPECT_EQ(cache.acquire(30, 3, std::span(&line1, 1)), kNever);  // the earliest
-  EXPECT_EQ(cache.missQueueFreesAt(), 50u);
-  EXPECT_EQ(cache.acquire(52, 3, two), kNever);  // one free (50), two needed
-  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
-  EXPECT_EQ(cache.acquire(52, 3, std::span(&line1, 1)), 102u);  // takes the entry freed at 50: busy to 102
-  EXPECT_EQ(cache.acquire(40, 4, std::span(&one, 1)), kNever);  // at 40 all busy (55, 70, 102)
-  EXPECT_EQ(cache.missQueueFreesAt(), 55u);
-  EXPECT_EQ(cache.acquire(60, 4, three), kNever);  // one free (55), three needed: the third earliest
-  EXPECT_EQ(cache.missQueueFreesAt(), 102u);
-  EXPECT_EQ(cache.stats().miss_queue_full, 5u);  // one per refused access
-  EXPECT_EQ(cache.stats().misses, 4u);
-  EXPECT_EQ(cache.missesInFlight(60), 2u);  // 70 and 102
-}
-
-TEST(BlendArrayCacheLines, AnAccessGetsAllItsLinesOrNone) {
-  Recorder below;
-  BlendArrayCache cache(sectoredCache(16, 4, /*miss_queue=*/3), kSectored, 16, 0, below, false);
-  const LineTouch two[2] = {{0, 0b1111, 0}, {1, 0b1111, 0}};
-  const LineTouch three[3] = {{0, 0b1111, 0}, {1, 0b1111, 0}, {2, 0b1111, 0}};
-  // Two misses at 0 (entries busy until 50); a three-line access of another
-  // tile needs three entries: refused until the second busy one frees, at 50.
-  EXPECT_EQ(cache.acquire(0, 0, two), 50u);
-  EXPECT_EQ(cache.acquire(1, 1, three), kNever);
-  EXPECT_FALSE(cache.refusedBySet());
-  EXPECT_EQ(cache.missQueueFreesAt(), 50u);
-  EXPECT_EQ(cache.stats().accesses, 2u);  // nothing of the refused access counted
-  EXPECT_FALSE(cache.resident(1, 0));
-  EXPECT_EQ(cache.acquire(50, 1, three), 100u);
-  EXPECT_EQ(cache.stats().misses, 5u);
-  EXPECT_EQ(cache.linesInUse(), 5u);  // every line of both accesses is pinned
-  // Tile 0's lines are resident: hitting both costs no entry.
-  EXPECT_EQ(cache.acquire(60, 0, two), 70u);
-  EXPECT_FALSE(cache.release(0, two));
-  EXPECT_FALSE(cache.release(0, two));
-  EXPECT_EQ(cache.linesInUse(), 3u);
-}
-
-TEST(BlendArrayCacheLines, AnAccessNeverEvictsItsOwnLines) {
-  Recorder below;
-  // One set of 2 ways, 1 line per tile of 128 B.
-  BlendArrayCache cache(sectoredCache(2, 2), TileLines{128, 32, 2}, 8, 0, below, false);
-  const LineTouch a{0, 0b0001, 0};
-  ASSERT_NE(cache.acquire(0, 0, std::span(&a, 1)), kNever);  // tile 0 line 0 in way 0
-  cache.release(0, std::span(&a, 1));
-  // Tile 0, lines 0 (resident) and 1 (absent): the victim for line 1 must not
-  // be line 0 of this very access: it takes the free way.
-  const LineTouch both[2] = {{0, 0b0001, 0}, {1, 0b0001, 0}};
-  ASSERT_NE(cache.acquire(10, 0, both), kNever);
-  EXPECT_TRUE(cache.resident(0, 0));
-  EXPECT_TRUE(cache.resident(0, 1));
-  // Both pinned: tile 1's line 0 finds no way out of use.
-  EXPECT_EQ(cache.acquire(20, 1, std::span(&a, 1)), kNever);
-  EXPECT_TRUE(cache.refusedBySet());
-  EXPECT_EQ(cache.stats().set_in_use, 1u);
-  EXPECT_TRUE(cache.release(0, both));  // frees the refused set
-}
-
-TEST(BlendArrayCacheLines, MissesAreClassified) {
-  Recorder below;
-  // 2 lines direct mapped (2 sets of 1 way), one line per tile: tiles 0 and 2 share set 0.
-  BlendArrayCache cache(sectoredCache(2, 1), TileLines{128, 128, 1}, 8, 0, below, false, {}, /*classify=*/true);
-  Cycle now = 0;
-  for (uint32_t t : {0u, 2u, 0u, 1u, 3u, 2u}) {
-    const LineTouch r{0, 1, 0};
-    ASSERT_NE(cache.acquire(now += 100, t, std::span(&r, 1)), kNever);
-    cache.release(t, std::span(&r, 1));
-  }
-  // 0, 2: compulsory; 0: conflict (a 2-line fully associative cache still has
-  // it); 1, 3: compulsory; 2: capacity (neither holds it).
-  EXPECT_EQ(cache.stats().compulsory_misses, 4u);
-  EXPECT_EQ(cache.stats().conflict_misses, 1u);
-  EXPECT_EQ(cache.stats().capacity_misses, 1u);
-  EXPECT_EQ(cache.stats().misses, 6u);
-}
-
-TEST(BlendArrayCacheLines, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheSector) {
-  Recorder below;
-  // 2 lines direct mapped (2 sets of 1 way), lines of 4 sectors, one line per tile.
-  BlendArrayCache cache(sectoredCache(2, 1), TileLines{128, 32, 1}, 8, 0, below, false, {}, /*classify=*/true);
-  Cycle now = 0;
-  const auto touch = [&](uint32_t tile, uint32_t sectors) {
-    const LineTouch r{0, sectors, 0};
-    ASSERT_NE(cache.acquire(now += 100, tile, std::span(&r, 1)), kNever);
-    cache.release(tile, std::span(&r, 1));
-  };
-  touch(0, 0b01);  // compulsory
-  touch(1, 0b01);  // compulsory (set 1)
-  touch(2, 0b01);  // compulsory: evicts tile 0 from set 0, and from the 2-line fully associative cache
-  touch(0, 0b10);  // compulsory (sector 1 never held)
-  // Tile 0 is back with sector 1 only, in both caches: sector 0 misses in
-  // both (capacity), though the fully associative cache holds the line.
-  touch(0, 0b01);
-  EXPECT_EQ(cache.stats().compulsory_misses, 4u);
-  EXPECT_EQ(cache.stats().capacity_misses, 1u);
-  EXPECT_EQ(cache.stats().conflict_misses, 0u);
-  // Tile 2 (sector 0) was evicted from set 0 but the fully associative cache
-  // still holds it: a conflict.
-  touch(2, 0b01);
-  EXPECT_EQ(cache.stats().conflict_misses, 1u);
-  EXPECT_EQ(cache.stats().misses, 6u);
-}
-
-TEST(BlendArrayCacheLines, StatsOfPartitionsAddUpAndThePeakIsTheLarger) {
-  CacheStats a, b;
-  a.accesses = 3, a.hits = 1, a.misses = 2, a.conflict_misses = 1, a.fill_bytes = 64, a.peak_misses_in_flight = 5;
-  b.accesses = 4, b.hits = 4, b.hits_under_miss = 2, b.write_bytes = 32, b.peak_misses_in_flight = 2;
-  a += b;
-  EXPECT_EQ(a.accesses, 7u);
-  EXPECT_EQ(a.hits, 5u);
-  EXPECT_EQ(a.misses, 2u);
-  EXPECT_EQ(a.conflict_misses, 1u);
-  EXPECT_EQ(a.hits_under_miss, 2u);
-  EXPECT_EQ(a.fill_bytes, 64u);
-  EXPECT_EQ(a.write_bytes, 32u);
-  EXPECT_EQ(a.peak_misses_in_flight, 5u);
-}
-
-TEST(BlendArrayCacheLines, DirtyRangesAtTheEndAreTheDirtySectors) {
-  Recorder below;
-  BlendArrayCache cache(sectoredCache(8, 2), kSectored, 16, 1 << 20, below, true);
-  const LineTouch w{3, 0b1001, 0b1001};  // sectors 0 and 3: two runs
-  ASSERT_NE(cache.acquire(0, 5, std::span(&w, 1)), kNever);
-  std::vector<DirtyRange> d;
-  cache.dirtyRanges(d);
-  ASSERT_EQ(d.size(), 2u);
-  const uint64_t line = (1 << 20) + (5 * 4 + 3) * 128;
-  EXPECT_EQ(d[0].addr, line);
-  EXPECT_EQ(d[0].bytes, 32u);
-  EXPECT_EQ(d[1].addr, line + 96);
-  EXPECT_TRUE(cache.touched(5));
-  EXPECT_FALSE(cache.touched(4));
 }
 
 }  // namespace

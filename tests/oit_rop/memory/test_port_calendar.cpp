@@ -70,3 +70,114 @@ TEST(PortCalendar, NeverBooksMoreThanTheRateAndLeavesNoHoles) {
   EXPECT_GE(last_end - first, bytes / 8);
   EXPECT_LE(last_end - first, bytes / 8 + 16);  // (idle cycles only before the backlog built up)
 }
+
+// Retiring cycles frees their slots for the cycles one ring further on. These
+// tests retire by large steps (advanceBase: at most two ranges of the ring,
+// bit masks a 64-bit word at a time), across 64-bit words of the full-cycle
+// bitmap and across the ring's end, and check which cycles are free afterwards
+// through used() and through a booking (which skips the cycles whose full bit
+// is set). At 1 B/clock one byte books one whole cycle; lookback 0: only
+// retireBefore moves the ring; the ring then has max(1024, bit_ceil(0 + 64)) =
+// 1024 slots (cycle c in slot c mod 1024, its full bit in word (c mod 1024) / 64).
+namespace {
+constexpr uint32_t kWholeCycle = 1u << 16;
+// used(c) == expect for every c in [first, last): the first cycle that is not.
+testing::AssertionResult usedIs(const PortCalendar& p, Cycle first, Cycle last, uint32_t expect) {
+  for (Cycle c = first; c < last; ++c)
+    if (p.used(c) != expect) return testing::AssertionFailure() << "used(" << c << ") = " << p.used(c) << ", expected " << expect;
+  return testing::AssertionSuccess();
+}
+// Makes the ring of a 1 B/clock, lookback-0 calendar cover [base, base + 1024)
+// (base < 1024) with every slot booked: the whole ring booked from cycle 0,
+// the cycles before `base` retired, the freed ones booked again.
+void fillRingFrom(PortCalendar& p, Cycle base) {
+  Cycle s, e;
+  p.book(0, 1024, s, e);
+  p.retireBefore(base);
+  p.book(1024, uint32_t(base), s, e);
+  EXPECT_EQ(e, base + 1024);
+}
+}  // namespace
+
+TEST(PortCalendar, RetiringAcrossBitmapWordsFreesExactlyTheRetiredSlots) {
+  PortCalendar p(1.0, 0);
+  Cycle s, e;
+  p.book(0, 1024, s, e);  // the whole ring: cycles 0..1023, every slot full
+  ASSERT_EQ(s, 0u);
+  ASSERT_EQ(e, 1024u);
+  // Cycles 0..999 leave (slots 0..999: words 0..14 whole, bits 0..39 of word
+  // 15); the ring now covers 1000..2023: 1000..1023 still booked (slots
+  // 1000..1023, bits 40..63 of word 15), 1024..2023 (slots 0..999) free.
+  p.retireBefore(1000);
+  EXPECT_TRUE(usedIs(p, 1000, 1024, kWholeCycle));
+  EXPECT_TRUE(usedIs(p, 1024, 2024, 0));
+  // A booking from 1000 skips the 24 full cycles and takes the 1000 free ones
+  // after them: it ends at 2024, the ring's end (a stale full bit would push
+  // it further, and the ring would grow).
+  p.book(1000, 1000, s, e);
+  EXPECT_EQ(s, 1024u);
+  EXPECT_EQ(e, 2024u);
+  EXPECT_TRUE(usedIs(p, 1000, 2024, kWholeCycle));
+}
+
+TEST(PortCalendar, RetiringAcrossTheRingsEndClearsBothRanges) {
+  PortCalendar p(1.0, 0);
+  fillRingFrom(p, 1000);  // the ring [1000, 2024), every slot booked
+  Cycle s, e;
+  // Cycles 1000..1099 leave: slots 1000..1023 (bits 40..63 of word 15, up to
+  // the ring's end) and, wrapped, slots 0..75 (word 0 whole, bits 0..11 of
+  // word 1). The ring covers 1100..2123: 1100..2023 stay booked; 2024..2047
+  // (slots 1000..1023) and 2048..2123 (slots 0..75) free.
+  p.retireBefore(1100);
+  EXPECT_TRUE(usedIs(p, 1100, 2024, kWholeCycle));
+  EXPECT_TRUE(usedIs(p, 2024, 2124, 0));
+  // Exactly 100 free cycles, the first at 2024: 100 bytes end at the ring's end.
+  p.book(1100, 100, s, e);
+  EXPECT_EQ(s, 2024u);
+  EXPECT_EQ(e, 2124u);
+  EXPECT_TRUE(usedIs(p, 1100, 2124, kWholeCycle));
+}
+
+TEST(PortCalendar, RetiringMoreThanTheRingFreesEverySlot) {
+  PortCalendar p(1.0, 0);
+  fillRingFrom(p, 700);  // [700, 1724) full
+  Cycle s, e;
+  // 700 -> 3000: 2300 cycles leave, more than the ring's 1024: every slot
+  // cleared; the ring covers 3000..4023, all free.
+  p.retireBefore(3000);
+  EXPECT_TRUE(usedIs(p, 3000, 4024, 0));
+  p.book(3000, 1024, s, e);
+  EXPECT_EQ(s, 3000u);
+  EXPECT_EQ(e, 4024u);
+}
+
+// The lookback moves the ring as requests arrive: lookback 300 gives a ring of
+// max(1024, bit_ceil(2 x 300 + 64) = 1024) slots, and a request at cycle n
+// retires the cycles before n - 300 (here across the ring's end).
+TEST(PortCalendar, ALaterRequestRetiresTheCyclesPastTheLookback) {
+  PortCalendar p(1.0, 300);
+  Cycle s, e;
+  p.book(0, 1000, s, e);  // cycles 0..999 (slots 0..999)
+  ASSERT_EQ(e, 1000u);
+  // A request at 1000 retires 0..699: the ring covers 700..1723, its 24
+  // cycles 1000..1023 fill the ring's end; 1024..1723 (slots 0..699) are free.
+  p.book(1000, 24, s, e);
+  EXPECT_EQ(s, 1000u);
+  EXPECT_EQ(e, 1024u);
+  EXPECT_TRUE(usedIs(p, 700, 1024, kWholeCycle));
+  EXPECT_TRUE(usedIs(p, 1024, 1724, 0));
+  p.book(1024, 700, s, e);  // every slot booked
+  ASSERT_EQ(e, 1724u);
+  // A request at 1400 retires 700..1099: slots 700..1023 (from bit 60 of word
+  // 10 to the ring's end) and 0..75 (word 0, bits 0..11 of word 1). The ring
+  // covers 1100..2123: 1100..1723 booked, 1724..2123 (400 cycles) free, so the
+  // request, whose own cycle is booked, starts at 1724.
+  p.book(1400, 1, s, e);
+  EXPECT_EQ(s, 1724u);
+  EXPECT_EQ(e, 1725u);
+  EXPECT_TRUE(usedIs(p, 1100, 1725, kWholeCycle));
+  EXPECT_TRUE(usedIs(p, 1725, 2124, 0));
+  p.book(1400, 399, s, e);  // the other 399 free cycles: up to the ring's end
+  EXPECT_EQ(s, 1725u);
+  EXPECT_EQ(e, 2124u);
+}
