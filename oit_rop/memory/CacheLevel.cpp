@@ -10,7 +10,9 @@
 
 namespace oit::rop {
 
-namespace {
+// Named, not anonymous: MissClassifier::Impl (external linkage) holds two, and
+// gcc warns (-Wsubobject-linkage) when a unity build includes this file.
+namespace cache_level_detail {
 
 // Open-addressing hash map uint64 -> uint32 with linear probing and
 // backward-shift erase (the classifier's tables: lines are sparse, e.g. the
@@ -71,6 +73,12 @@ class LineTable {
   std::vector<uint32_t> values_;
   size_t mask_ = 0, size_ = 0;
 };
+
+}  // namespace cache_level_detail
+
+using cache_level_detail::LineTable;
+
+namespace {
 
 // The slice of a line: its number plus (XOR for a power of two) its bits
 // from 12, 24 and 36 up, mod the slices: a sequential stream (fixed high

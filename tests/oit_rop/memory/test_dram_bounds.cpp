@@ -313,7 +313,9 @@ TEST(DramBounds, NeverAbovePeakInAnyInterval) {
       EXPECT_LE(double(busiest), per_interval) << preset << ", interval " << interval;
       EXPECT_EQ(total, bursts * 64) << preset;
       // The stream saturates the channels: the busiest 100-cycle interval is at least 90 % full.
-      if (interval == 100) EXPECT_GE(double(busiest), 0.9 * c.dram.channels * 100 / m.burstCycles() * 64) << preset;
+      if (interval == 100) {
+        EXPECT_GE(double(busiest), 0.9 * c.dram.channels * 100 / m.burstCycles() * 64) << preset;
+      }
     }
   }
 }

@@ -46,7 +46,9 @@ Cycle hitAfterMiss(DramConfig c, bool one_more = false) {
   EXPECT_EQ(m.access(100, 65536, 64, false, Surface::BlendArrays), 177u);  // bank 0 row 1
   // With one_more, a read of bank 0 row 2 after it: precharge once the miss's
   // data ended (177), data 210-214; the bus idles 177-210 before it.
-  if (one_more) EXPECT_EQ(m.access(100, 2 * 65536, 64, false, Surface::BlendArrays), 214u);
+  if (one_more) {
+    EXPECT_EQ(m.access(100, 2 * 65536, 64, false, Surface::BlendArrays), 214u);
+  }
   return m.access(101, 8192 + 64, 64, false, Surface::BlendArrays);
 }
 
