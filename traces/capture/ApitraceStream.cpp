@@ -167,8 +167,6 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   info.name = fmt::format("{} #{} program {}", fn, d.index, d.program).substr(0, 55);
   info.state = toDrawState(d, d.records);
   f.header.draws.push_back(info);
-  ++f.draws_by_mode[d.state.blend_mode];
-  f.fragments_by_mode[d.state.blend_mode] += d.records;
   if (!d.state.early_tests) ++f.late_depth_draws;
   if (d.instanced) ++f.multi_draws;
   if (d.window) f.window_draws.push_back(d.index);
