@@ -7,7 +7,6 @@
 // and the draws the trace cannot express listed with why. See traces/CAPTURE.md.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
