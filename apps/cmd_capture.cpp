@@ -85,7 +85,6 @@ void runApitraceCapture(const CaptureArgs& a) {
   o.verify = a.verify;
   o.max_records_per_draw = a.opts.max_records_per_draw;
   o.retracer = a.retracer;
-  capture::checkApitraceFile(o.trace);
   for (uint32_t f = o.first_frame; f <= o.last_frame; ++f) {
     const std::string path = rangeFileName(a.output, f, o.first_frame, o.last_frame);
     checkOutputFile("-o", path);

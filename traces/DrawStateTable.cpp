@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "traces/CsvTokens.hpp"
 #include "traces/TraceFormat.hpp"
 
 namespace oit::detail {
@@ -121,12 +122,8 @@ std::string drawStateCsv(const DrawInfo& d) {
 
 std::optional<std::string> parseDrawStateCsv(std::string_view fields, DrawState& out) {
   std::vector<std::string_view> t;
-  for (size_t i = 0; i < fields.size();) {
-    while (i < fields.size() && (fields[i] == ' ' || fields[i] == '\t')) ++i;
-    const size_t start = i;
-    while (i < fields.size() && fields[i] != ' ' && fields[i] != '\t') ++i;
-    if (i > start) t.push_back(fields.substr(start, i - start));
-  }
+  CsvTokens tokens(fields, 0);
+  for (std::string_view v = tokens.next(); !v.empty(); v = tokens.next()) t.push_back(v);
   if (t.size() != 10)
     return fmt::format("expected 10 fields after the draw id (blend, depth, depth func, 6 blend enums, "
                        "fragments), found {}", t.size());

@@ -100,24 +100,18 @@ const std::array<float, 256> kUnorm8ToFloat = makeUnorm8Table();
 DrawSet::DrawSet(const std::vector<DrawInfo>& all) {
   // Records may name only draws whose fragments are recorded (format v2 keeps those
   // of blend modes the model does not blend out of the records).
-  std::vector<DrawInfo> draws;
-  draws.reserve(all.size());
-  for (const DrawInfo& d : all) {
-    if (d.state && !d.state->recorded())
-      unrecorded_.push_back(d.id);
-    else
-      draws.push_back(d);
-  }
+  std::vector<uint32_t> ids;
+  ids.reserve(all.size());
+  for (const DrawInfo& d : all) (d.state && !d.state->recorded() ? unrecorded_ : ids).push_back(d.id);
   std::sort(unrecorded_.begin(), unrecorded_.end());
-  uint32_t max_id = 0;
-  for (const DrawInfo& d : draws) max_id = std::max(max_id, d.id);
+  const uint32_t max_id = ids.empty() ? 0 : *std::max_element(ids.begin(), ids.end());
   dense_ = max_id < kDenseIdLimit;
   if (dense_) {
-    limit_ = draws.empty() ? 0 : max_id + 1;
+    limit_ = ids.empty() ? 0 : max_id + 1;
     known_.assign(static_cast<size_t>(limit_) + 1, 0);
-    for (const DrawInfo& d : draws) known_[d.id] = 1;
+    for (const uint32_t id : ids) known_[id] = 1;
   } else {
-    for (const DrawInfo& d : draws) sorted_.push_back(d.id);
+    sorted_ = std::move(ids);
     std::sort(sorted_.begin(), sorted_.end());
   }
 }

@@ -1,42 +1,23 @@
-// Runs the built oitsim executable and captures its exit code and output;
+// Runs the built oitsim executable (through RunShell.hpp) and captures its exit code and output;
 // file and CSV helpers shared by the CLI tests.
 #pragma once
 
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
+#include "RunShell.hpp"
+
 namespace oit::test {
 
-struct CliResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
 inline std::string oitsimPath() { return std::string(OITSIM_BINARY_DIR) + "/apps/oitsim"; }
-
-// Runs a shell command; exit code -1 if it did not exit normally.
-inline CliResult runShell(const std::string& command) {
-  CliResult r;
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 inline CliResult runOitsim(const std::string& args) { return runShell(oitsimPath() + " " + args); }
 

@@ -1,13 +1,11 @@
 // Helpers shared by the capture tests.
 #pragma once
 
-#include <sys/wait.h>
-
-#include <cstdio>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "RunShell.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::capture::test_util {
@@ -22,16 +20,12 @@ class VectorSink : public FragmentSink {
   uint64_t written() const override { return fragments.size(); }
 };
 
-// Runs a shell command, appends its stdout and stderr to *out; its exit code (-1
-// when it did not exit).
+// Runs a shell command (RunShell.hpp), appends its stdout and stderr to *out; its
+// exit code (-1 when it did not exit).
 inline int runCommand(const std::string& command, std::string* out) {
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (!p) return -1;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-  const int status = pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const test::CliResult r = test::runShell(command);
+  out->append(r.output);
+  return r.exit_code;
 }
 
 }  // namespace oit::capture::test_util

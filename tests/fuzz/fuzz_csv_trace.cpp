@@ -1,4 +1,4 @@
-// libFuzzer harness of the CSV trace reader (traces/CsvTrace.cpp): any byte
+// libFuzzer harness of the CSV trace reader (traces/CsvTraceReader.cpp): any byte
 // string as a .csv file (64 x 64 when it names no frame size). It must be
 // accepted or refused with TraceError; accepted traces are read twice in
 // small batches, and must survive a round trip through the binary writer and

@@ -249,7 +249,8 @@ ApitraceResult captureApitrace(const ApitraceOptions& o) {
   if (again) status = replay(std::min(first.overflow_need, ceiling), 0);
   // The X server stops while the stream is read (reaped when `x` goes).
   if (x) x->terminate();
-  ApitraceResult result = readStream(o, retracer, interposer, status, stream_path, log_path);
+  // The first scan describes the stream unless the second replay wrote it anew.
+  ApitraceResult result = readStream(o, retracer, interposer, status, stream_path, log_path, again ? nullptr : &first);
   if (again) {
     result.replays = 2;
     result.first_record_capacity = first.record_capacity;

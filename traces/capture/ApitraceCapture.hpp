@@ -7,7 +7,6 @@
 // and the draws the trace cannot express listed with why. See traces/CAPTURE.md.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -57,7 +56,6 @@ struct FrameCapture {
   std::vector<Fragment> fragments;  // API order: draw, primitive, then (y, x)
   std::vector<UncapturedDraw> uncaptured;
   uint64_t draw_calls = 0;          // every draw call of the frame
-  std::array<uint64_t, 6> draws_by_mode{}, fragments_by_mode{};  // captured, by BlendMode
   uint64_t late_depth_draws = 0;    // programs that discard or write depth: recorded before the depth test
   uint64_t multi_draws = 0;         // instanced or multi-draw calls: primitive ids restart per instance
   std::vector<uint32_t> window_draws;  // captured draws drawn into the window, not a framebuffer object

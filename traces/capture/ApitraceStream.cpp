@@ -167,8 +167,6 @@ void addDraw(const st::DrawChunk& d, const st::GpuRecord* recs, FrameCapture& f)
   info.name = fmt::format("{} #{} program {}", fn, d.index, d.program).substr(0, 55);
   info.state = toDrawState(d, d.records);
   f.header.draws.push_back(info);
-  ++f.draws_by_mode[d.state.blend_mode];
-  f.fragments_by_mode[d.state.blend_mode] += d.records;
   if (!d.state.early_tests) ++f.late_depth_draws;
   if (d.instanced) ++f.multi_draws;
   if (d.window) f.window_draws.push_back(d.index);
@@ -294,7 +292,8 @@ StreamScan scanStream(const std::string& stream_path) {
 }
 
 ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer, const std::string& interposer,
-                          int status, const std::string& stream_path, const std::string& log_path) {
+                          int status, const std::string& stream_path, const std::string& log_path,
+                          const StreamScan* scan) {
   ApitraceResult result;
   result.renderer_log = readFile(log_path);
   const MappedStream data(stream_path, true);
@@ -313,7 +312,8 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
 
   StreamReader in(data.data(), data.size(), o.trace);
   in.take<st::StreamHeader>();
-  const std::unordered_map<uint32_t, uint64_t> frame_records = scanBytes(data.data(), data.size()).records;
+  const StreamScan scanned = scan ? StreamScan{} : scanBytes(data.data(), data.size());
+  const std::unordered_map<uint32_t, uint64_t>& frame_records = (scan ? *scan : scanned).records;
   FrameCapture cur;
   std::vector<Fragment> check;  // the check drawing's records of the frame (--verify)
   FrameCapture check_counts;    // what converting them changed (not reported)

@@ -24,7 +24,10 @@ StreamScan scanStream(const std::string& stream_path);
 
 // Reads the stream of one retracer run (`status`: its raw waitpid status) into
 // frames; throws one line naming the trace when the run failed or the stream says so.
+// `scan`: scanStream's result for this same stream when the caller has it, else
+// nullptr (the stream is scanned here).
 ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer, const std::string& interposer,
-                          int status, const std::string& stream_path, const std::string& log_path);
+                          int status, const std::string& stream_path, const std::string& log_path,
+                          const StreamScan* scan);
 
 }  // namespace oit::capture

@@ -1,4 +1,5 @@
 // frameSummary: what `oitsim capture --apitrace` prints per frame.
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -31,11 +32,19 @@ std::string frameSummary(const FrameCapture& f, const std::string& output) {
   using namespace stream;
   std::string s = fmt::format("frame {} -> {}: {} fragments, {} x {}, {} draw calls", f.frame, output,
                               f.fragments.size(), f.header.width, f.header.height, f.draw_calls);
+  // The captured draws by blend mode, from the draw table's states.
+  constexpr size_t kModes = static_cast<size_t>(oit::BlendMode::Other) + 1;
+  std::array<uint64_t, kModes> draws_by_mode{}, fragments_by_mode{};
+  for (const DrawInfo& d : f.header.draws) {
+    const auto m = static_cast<size_t>(d.state->blend);
+    ++draws_by_mode[m];
+    fragments_by_mode[m] += d.state->fragments;
+  }
   std::vector<std::string> modelled, unmodelled;
-  for (uint32_t m = 0; m < f.draws_by_mode.size(); ++m) {
-    if (!f.draws_by_mode[m]) continue;
+  for (uint32_t m = 0; m < kModes; ++m) {
+    if (!draws_by_mode[m]) continue;
     const std::string part =
-        fmt::format("{} {} ({} fragments)", f.draws_by_mode[m], blendModeName(m), f.fragments_by_mode[m]);
+        fmt::format("{} {} ({} fragments)", draws_by_mode[m], blendModeName(m), fragments_by_mode[m]);
     (m <= kBlendPremulOver ? modelled : unmodelled).push_back(part);
   }
   s += fmt::format("\n  captured: {}", modelled.empty() ? std::string("none") : fmt::format("{}", fmt::join(modelled, ", ")));

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "traces/capture/EglContext.hpp"
 #include "traces/capture/GlEntryPoints.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 
@@ -24,92 +25,6 @@ using gen::Mat4;
 using gen::Vec3;
 
 namespace {
-
-constexpr const char* kInstallHint =
-    "headless capture needs Mesa's EGL and software GL (llvmpipe): "
-    "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri (scripts/setup.sh installs them)";
-
-const char* eglErrorName(EGLint e) {
-  switch (e) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    case EGL_BAD_SURFACE: return "EGL_BAD_SURFACE";
-    default: return "unknown EGL error";
-  }
-}
-
-[[noreturn]] void eglFail(const char* call, const std::string& extra = {}) {
-  const EGLint e = eglGetError();
-  throw GlError(fmt::format("{} failed: {} (0x{:04X}){}; {}", call, eglErrorName(e), e,
-                            extra.empty() ? "" : " - " + extra, kInstallHint));
-}
-
-const char* glErrorName(GLenum e) {
-  switch (e) {
-    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
-    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
-    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
-    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
-    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
-    default: return "unknown GL error";
-  }
-}
-
-// GL reports errors lazily: check after each group of calls, naming the group.
-void checkGl(const char* what) {
-  const GLenum e = glGetError();
-  if (e != GL_NO_ERROR)
-    throw GlError(fmt::format("{} failed: {} (0x{:04X})", what, glErrorName(e), e));
-}
-
-// One EGL display + OpenGL 4.5 core context with no surface (rendering goes to FBOs).
-struct EglContext {
-  EGLDisplay display = EGL_NO_DISPLAY;
-  EGLContext context = EGL_NO_CONTEXT;
-
-  EglContext() {
-    if (const std::string& why = loadEntryPoints(); !why.empty()) throw GlError(why);
-    const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!client_ext) eglFail("eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS)", "no EGL client extensions");
-    if (!std::strstr(client_ext, "EGL_MESA_platform_surfaceless"))
-      throw GlError(fmt::format("eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS): no "
-                                "EGL_MESA_platform_surfaceless among the client extensions ({}); {}",
-                                *client_ext ? client_ext : "none: no EGL vendor library found", kInstallHint));
-    auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-        eglGetProcAddress("eglGetPlatformDisplayEXT"));
-    if (!getPlatformDisplay) eglFail("eglGetProcAddress(eglGetPlatformDisplayEXT)");
-    display = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display == EGL_NO_DISPLAY) eglFail("eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA)");
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor)) eglFail("eglInitialize(surfaceless display)");
-    if (!eglBindAPI(EGL_OPENGL_API)) eglFail("eglBindAPI(EGL_OPENGL_API)");
-    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                              EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                              EGL_NONE};
-    // EGL_KHR_no_config_context: no surface, so no config is needed.
-    context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attribs);
-    if (context == EGL_NO_CONTEXT) eglFail("eglCreateContext(OpenGL 4.5 core, no config)");
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
-      eglDestroyContext(display, context);
-      eglFail("eglMakeCurrent(no surface)");
-    }
-  }
-  ~EglContext() {
-    // The display is shared by every context of the process: not terminated here.
-    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-    eglDestroyContext(display, context);
-  }
-  EglContext(const EglContext&) = delete;
-  EglContext& operator=(const EglContext&) = delete;
-};
 
 // Shading modes of the fragment shader (u_shade).
 enum ShadeMode : int { kConstant = 0, kLambertTwoSided = 1, kLambertOneSided = 2, kChecker = 3 };
@@ -175,21 +90,6 @@ void main() {
 }
 )";
 
-GLuint compileShader(GLenum type, const char* src, const char* what) {
-  GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &src, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    glDeleteShader(s);
-    throw GlError(fmt::format("glCompileShader({}) failed: {}", what, log));
-  }
-  return s;
-}
-
 }  // namespace
 
 // Geometry of one frame: per trace draw, parts with their own shading, all in one
@@ -252,7 +152,7 @@ struct Capturer::Impl {
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     if (major * 10 + minor < 45)
       throw GlError(fmt::format("OpenGL {}.{} ({}) is older than the 4.5 core the capture needs; {}",
-                                major, minor, renderer, kInstallHint));
+                                major, minor, renderer, kGlInstallHint));
 
     const GLuint vs = compileShader(GL_VERTEX_SHADER, kVertexShader, "vertex shader");
     const GLuint fs = compileShader(GL_FRAGMENT_SHADER, kFragmentShader, "fragment shader");
@@ -694,19 +594,6 @@ GlReference Capturer::reference(double azimuth_offset_deg) {
   for (size_t i = 0; i < pixels; ++i) ref.count[i] = rgba[4 * i];
   glDisable(GL_BLEND);
   return ref;
-}
-
-std::optional<std::string> glUnavailableReason() {
-  try {
-    EglContext ctx;
-    GLint major = 0, minor = 0;
-    glGetIntegerv(GL_MAJOR_VERSION, &major);
-    glGetIntegerv(GL_MINOR_VERSION, &minor);
-    if (major * 10 + minor < 45) return fmt::format("OpenGL {}.{} < 4.5", major, minor);
-    return std::nullopt;
-  } catch (const GlError& e) {
-    return std::string(e.what());
-  }
 }
 
 std::string frameFileName(const std::string& output, uint32_t frame, uint32_t frames) {

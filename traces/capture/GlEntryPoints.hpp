@@ -2,7 +2,7 @@
 // (dlopen of GLVND's libEGL.so.1 and libOpenGL.so.0) the first time a capture
 // starts, so that the oitsim executable does not link GL: `run`, `sweep` and
 // every other command start on machines (e.g. cluster compute nodes) that have
-// no GL libraries at all. Only traces/capture/GlCapture.cpp includes this.
+// no GL libraries at all. Only traces/capture/GlCapture.cpp and EglContext.cpp include this.
 #pragma once
 
 #include <string>

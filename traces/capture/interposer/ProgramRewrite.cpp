@@ -93,7 +93,13 @@ void Recorder::afterLink(GLuint program) {
   GLint linked = 0;
   g.glGetProgramiv(program, GL_LINK_STATUS, &linked);
   if (!linked) return;  // the application's own failure: nothing to rewrite
-  ProgramInfo info;
+  // A program that is not rewritten is remembered with the reason its draws are
+  // not captured.
+  auto refuse = [&](uint32_t reason) {
+    ProgramInfo refused;
+    refused.reason = reason;
+    programs_[program] = refused;
+  };
 
   GLint attached = 0;
   g.glGetProgramiv(program, GL_ATTACHED_SHADERS, &attached);
@@ -101,44 +107,31 @@ void Recorder::afterLink(GLuint program) {
   if (attached > 0) g.glGetAttachedShaders(program, attached, nullptr, shaders.data());
   GLuint main_shader = 0;
   std::string source;
+  glsl::SourceInfo si;
   for (GLuint s : shaders) {
     GLint type = 0;
     g.glGetShaderiv(s, GL_SHADER_TYPE, &type);
     if (type != GL_FRAGMENT_SHADER) continue;
     std::string src = shaderSource(s);
-    if (glsl::inspect(src).defines_main) {
+    if (const glsl::SourceInfo inspected = glsl::inspect(src); inspected.defines_main) {
       main_shader = s;
       source = std::move(src);
+      si = inspected;
       break;
     }
   }
-  if (!main_shader) {
-    info.reason = kNotRewritten;
-    programs_[program] = info;
-    return;
-  }
-  const glsl::SourceInfo si = glsl::inspect(source);
+  if (!main_shader) return refuse(kNotRewritten);
   std::string colour;
   if (!(si.es && si.version < 300)) {
     bool integer = false;
     std::optional<std::string> out;
     if (si.es || si.version >= 130) out = userOutput(program, si.es, integer);
-    if (integer) {
-      info.reason = kIntegerOutput;
-      programs_[program] = info;
-      return;
-    }
+    if (integer) return refuse(kIntegerOutput);
     if (!out) out = glsl::builtinColour(si);
-    if (!out) {
-      info.reason = kNoColourOutput;
-      programs_[program] = info;
-      return;
-    }
+    if (!out) return refuse(kNoColourOutput);
     colour = *out;
   } else if (!si.uses_frag_color && !si.uses_frag_data) {
-    info.reason = kNoColourOutput;
-    programs_[program] = info;
-    return;
+    return refuse(kNoColourOutput);
   }
   // Early depth tests record exactly the fragments that pass GL's depth test; a
   // shader that discards or writes depth needs the late test (see CAPTURE.md).
@@ -196,6 +189,7 @@ void Recorder::afterLink(GLuint program) {
   }
   g.glAttachShader(program, main_shader);
   for (GLuint s : replaced) g.glAttachShader(program, s);
+  ProgramInfo info;
   info.rewritten = true;
   info.reason = kCaptured;
   info.early_tests = early;

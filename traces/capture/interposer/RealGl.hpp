@@ -26,7 +26,9 @@ void* realProc(const char* name);
   X(PFNGLCOLORMASKPROC, glColorMask)                                             \
   X(PFNGLCOMPILESHADERPROC, glCompileShader)                                     \
   X(PFNGLCREATESHADERPROC, glCreateShader)                                       \
+  X(PFNGLDELETERENDERBUFFERSPROC, glDeleteRenderbuffers)                         \
   X(PFNGLDELETESHADERPROC, glDeleteShader)                                       \
+  X(PFNGLDELETETEXTURESPROC, glDeleteTextures)                                   \
   X(PFNGLDETACHSHADERPROC, glDetachShader)                                       \
   X(PFNGLDISABLEPROC, glDisable)                                                 \
   X(PFNGLENABLEPROC, glEnable)                                                   \

@@ -73,8 +73,8 @@ void Recorder::fail(const std::string& message) {
 
 void Recorder::atExit() { finishStream(false); }
 
-bool Recorder::ensureGl() {
-  if (gl_ready_) return true;
+void Recorder::ensureGl() {
+  if (gl_ready_) return;
   if (const char* missing = gl().load(); *missing)
     fail(std::string("the GL library has no ") + missing + " (the capture needs OpenGL 4.3 or OpenGL ES 3.1)");
   RealGl& g = gl();
@@ -84,7 +84,6 @@ bool Recorder::ensureGl() {
   record_binding_ = static_cast<GLuint>(bindings - 1);
   count_binding_ = static_cast<GLuint>(bindings - 2);
   gl_ready_ = true;
-  return true;
 }
 
 // ---------------------------------------------------------------- programs
@@ -163,9 +162,8 @@ void Recorder::targetSize(GLint fb, GLenum attachment, uint32_t& w, uint32_t& h)
   h = static_cast<uint32_t>(std::max(ih, 0));
 }
 
-void Recorder::readState(Pending& p) {
+void Recorder::readState(DrawState& s) {
   RealGl& g = gl();
-  DrawState& s = p.chunk.state;
   GLint v = 0;
   s.depth_test = g.glIsEnabled(GL_DEPTH_TEST) ? 1 : 0;
   GLboolean mask = GL_FALSE;
@@ -246,21 +244,27 @@ uint32_t Recorder::classify(Pending& p, GLint program) {
   return kCaptured;
 }
 
-bool Recorder::begin(const char* function, bool multi, Pending& p) {
-  if (!inRange()) return false;
+// What every listed draw's chunk says: its place in the frame, the function, the
+// program and the state; returns the program.
+GLint Recorder::describe(const char* function, bool multi, DrawChunk& c) {
   ensureGl();
-  RealGl& g = gl();
-  DrawChunk& c = p.chunk;
   c.frame = frame_;
   c.index = draw_index_++;
   c.instanced = multi ? 1 : 0;
   std::strncpy(c.function, function, sizeof c.function - 1);
   GLint program = 0;
-  g.glGetIntegerv(GL_CURRENT_PROGRAM, &program);
+  gl().glGetIntegerv(GL_CURRENT_PROGRAM, &program);
   c.program = static_cast<uint32_t>(program);
+  readState(c.state);
+  return program;
+}
+
+bool Recorder::begin(const char* function, bool multi, Pending& p) {
+  if (!inRange()) return false;
+  const GLint program = describe(function, multi, p.chunk);
   uint32_t w = 0, h = 0;
   if (drawableSize(w, h)) frame_w_ = w, frame_h_ = h;
-  readState(p);
+  DrawChunk& c = p.chunk;
   c.reason = classify(p, program);
   p.verify = verify_ && c.reason == kCaptured &&
              (c.state.blend_mode == kBlendOver || c.state.blend_mode == kBlendPremulOver);
@@ -269,17 +273,8 @@ bool Recorder::begin(const char* function, bool multi, Pending& p) {
 
 void Recorder::uncapturable(const char* function, uint32_t reason_with_program, uint32_t reason_without) {
   if (!inRange()) return;
-  Pending p;
-  ensureGl();
-  DrawChunk& c = p.chunk;
-  c.frame = frame_;
-  c.index = draw_index_++;
-  std::strncpy(c.function, function, sizeof c.function - 1);
-  GLint program = 0;
-  gl().glGetIntegerv(GL_CURRENT_PROGRAM, &program);
-  c.program = static_cast<uint32_t>(program);
-  readState(p);
-  c.reason = program ? reason_with_program : reason_without;
+  DrawChunk c{};
+  c.reason = describe(function, false, c) ? reason_with_program : reason_without;
   write(kDraw, &c, sizeof c);
 }
 

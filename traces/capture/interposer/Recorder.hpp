@@ -78,9 +78,10 @@ class Recorder {
 
   Recorder();
   bool inRange() const { return active_ && frame_ >= first_ && frame_ <= last_; }
-  bool ensureGl();
+  void ensureGl();
+  GLint describe(const char* function, bool multi, stream::DrawChunk& c);
   bool begin(const char* function, bool multi, Pending& p);
-  void readState(Pending& p);
+  void readState(stream::DrawState& s);
   uint32_t classify(Pending& p, GLint program);
   // Binds the record buffer (counter cleared) and turns recording on for the draw.
   void arm(Pending& p);

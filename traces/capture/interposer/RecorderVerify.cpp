@@ -27,7 +27,10 @@ void Recorder::ensureVerifyTarget() {
     g.glGenFramebuffers(1, &verify_fb_);
     g.glGenBuffers(1, &count_buffer_);
   }
-  // A new texture of the new size (immutable storage cannot be resized).
+  // A new texture of the new size (immutable storage cannot be resized); the old
+  // one is deleted (still attached to verify_fb_, which is not bound: GL frees it
+  // when the new texture replaces it there).
+  if (verify_colour_) g.glDeleteTextures(1, &verify_colour_);
   g.glGenTextures(1, &verify_colour_);
   g.glBindTexture(GL_TEXTURE_2D, verify_colour_);
   g.glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, static_cast<GLsizei>(frame_w_), static_cast<GLsizei>(frame_h_));
@@ -88,6 +91,9 @@ void Recorder::copyDepth(GLint app_fb) {
   if (format != verify_depth_format_) {
     GLint saved_rb = 0;
     g.glGetIntegerv(GL_RENDERBUFFER_BINDING, &saved_rb);
+    // The old renderbuffer (another size or format) goes: verify_fb_ is bound, so
+    // deleting it also detaches it there.
+    if (verify_depth_) g.glDeleteRenderbuffers(1, &verify_depth_);
     g.glGenRenderbuffers(1, &verify_depth_);
     g.glBindRenderbuffer(GL_RENDERBUFFER, verify_depth_);
     g.glRenderbufferStorage(GL_RENDERBUFFER, format, static_cast<GLsizei>(verify_w_), static_cast<GLsizei>(verify_h_));

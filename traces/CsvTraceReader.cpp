@@ -1,7 +1,7 @@
 // CSV form of trace format v1 (FORMAT.md, "CSV form"): a two-pass streaming
 // reader (pass 1 builds the draw table and count, pass 2 hands out batches;
-// memory: one batch, one read buffer and the draw table) and a buffered
-// writer. Floats are written in shortest round-trip form.
+// memory: one batch, one read buffer and the draw table). The writer is
+// CsvTraceWriter.cpp.
 #include <fmt/format.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -15,11 +15,11 @@
 #include <string_view>
 #include <unordered_map>
 
-#include "traces/AtomicFile.hpp"
+#include "traces/CsvTokens.hpp"
+#include "traces/DrawStateTable.hpp"
 #include "traces/InputFile.hpp"
 #include "traces/TraceBackends.hpp"
 #include "traces/TraceFormat.hpp"
-#include "traces/DrawStateTable.hpp"
 #include "traces/TraceRules.hpp"
 
 namespace oit::detail {
@@ -28,32 +28,19 @@ namespace fv = format_v1;
 
 namespace {
 
-constexpr std::string_view kColumnLine = "draw,prim,x,y,z,r,g,b,a,opaque";
+constexpr std::string_view kCsvColumnLine = "draw,prim,x,y,z,r,g,b,a,opaque";
 constexpr size_t kColumns = 10;
 constexpr const char* kColumnNames[kColumns] = {"draw", "prim", "x", "y", "z",
                                                 "r",    "g",    "b", "a", "opaque"};
 enum Col : size_t { kDraw, kPrim, kX, kY, kZ, kR, kG, kB, kA, kOpaque };
 
-bool isBlank(char c) { return c == ' ' || c == '\t'; }
-
 std::string_view trim(std::string_view s) {
-  while (!s.empty() && isBlank(s.front())) s.remove_prefix(1);
-  while (!s.empty() && isBlank(s.back())) s.remove_suffix(1);
+  while (!s.empty() && isCsvBlank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && isCsvBlank(s.back())) s.remove_suffix(1);
   return s;
 }
 
 bool allBlank(std::string_view s) { return trim(s).empty(); }
-
-// Quotes a draw name: backslash and double quote are escaped (names hold no
-// control bytes, so nothing else needs it).
-std::string quoteName(const std::string& name) {
-  std::string q = "\"";
-  for (char c : name) {
-    if (c == '"' || c == '\\') q += '\\';
-    q += c;
-  }
-  return q + '"';
-}
 
 // Shows the bytes a terminal would not print as text as \xNN: control bytes,
 // DEL, C1 controls (U+0080-U+009F) and every byte >= 0x80 that is not part of
@@ -261,16 +248,16 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
       parseMetadata(line);
       continue;
     }
-    if (line != kColumnLine)
+    if (line != kCsvColumnLine)
       fail(in_.offset(), std::nullopt, "header",
-           fmt::format("expected the column line '{}', found '{}'", kColumnLine,
+           fmt::format("expected the column line '{}', found '{}'", kCsvColumnLine,
                        line.substr(0, 80)));
     found_columns = true;
     break;
   }
   if (!found_columns)  // lines are 1-based: an empty file's error is on line 1
     throw TraceError::inCsv(path_, std::max<uint64_t>(in_.number(), 1), in_.nextOffset(), std::nullopt, "header",
-                            fmt::format("no column line '{}' (empty file or only comments)", kColumnLine));
+                            fmt::format("no column line '{}' (empty file or only comments)", kCsvColumnLine));
   data_offset_ = in_.nextOffset();
   data_line_ = in_.number() + 1;
 
@@ -334,31 +321,6 @@ bool CsvReader::nextDataLine() {
   return false;
 }
 
-// Tokens of a comment line, with their byte offsets in the file.
-class Tokens {
- public:
-  Tokens(std::string_view line, uint64_t line_offset) : s_(line), base_(line_offset) {}
-  // Next whitespace-separated token; empty at end of line.
-  std::string_view next() {
-    while (i_ < s_.size() && isBlank(s_[i_])) ++i_;
-    start_ = i_;
-    while (i_ < s_.size() && !isBlank(s_[i_])) ++i_;
-    return s_.substr(start_, i_ - start_);
-  }
-  uint64_t offset() const { return base_ + start_; }  // of the last token
-  // Skips blanks; the offset and remaining text.
-  std::string_view rest() {
-    while (i_ < s_.size() && isBlank(s_[i_])) ++i_;
-    start_ = i_;
-    return s_.substr(i_);
-  }
-
- private:
-  std::string_view s_;
-  uint64_t base_;
-  size_t i_ = 0, start_ = 0;
-};
-
 template <class T>
 bool parseNumber(std::string_view s, T& out) {
   if (s.empty()) return false;
@@ -367,7 +329,7 @@ bool parseNumber(std::string_view s, T& out) {
 }
 
 void CsvReader::parseMetadata(std::string_view line) {
-  Tokens t(line.substr(1), in_.offset() + 1);
+  CsvTokens t(line.substr(1), in_.offset() + 1);
   const std::string key(t.next());
   auto err = [&](const std::string& msg) { fail(t.offset(), std::nullopt, key, msg); };
   auto expectEnd = [&] {
@@ -379,7 +341,7 @@ void CsvReader::parseMetadata(std::string_view line) {
                      key == "camera" || key == "encoding" || key == "draw" || key == "draw-state";
   if (!known) return;  // a free comment
   if (after_columns)
-    err(fmt::format("'# {}' metadata must come before the column line '{}'", key, kColumnLine));
+    err(fmt::format("'# {}' metadata must come before the column line '{}'", key, kCsvColumnLine));
 
   if (key == "oitsim-trace") {
     const std::string_view v = t.next();
@@ -489,14 +451,14 @@ Fragment CsvReader::parseRow(uint64_t record, bool first_pass) {
     const bool last = c + 1 == kColumns;
     if (!last && comma == std::string_view::npos)
       err(c + 1, line.size(), fmt::format("row has {} columns, expected {} ({})", c + 1, kColumns,
-                                          kColumnLine));
+                                          kCsvColumnLine));
     if (last && comma != std::string_view::npos)
       err(c, comma, fmt::format("row has more than {} columns, expected {} ({})", kColumns,
-                                kColumns, kColumnLine));
+                                kColumns, kCsvColumnLine));
     const size_t end = last ? line.size() : comma;
     std::string_view raw = line.substr(p, end - p);
     size_t lead = 0;
-    while (lead < raw.size() && isBlank(raw[lead])) ++lead;
+    while (lead < raw.size() && isCsvBlank(raw[lead])) ++lead;
     start[c] = p + lead;
     field[c] = trim(raw);
     if (field[c].empty()) err(c, start[c], "empty field");
@@ -594,80 +556,10 @@ std::span<const Fragment> CsvReader::next() {
   return {buf_.data(), n};
 }
 
-class CsvWriter final : public FragmentSink {
- public:
-  CsvWriter(const std::string& path, const TraceHeader& header);
-  void write(const Fragment& f) override { write(std::span<const Fragment>(&f, 1)); }
-  void write(std::span<const Fragment> fs) override;
-  void commit() override { file_.commit(); }
-  uint64_t written() const override { return written_; }
-
- private:
-  TraceHeader header_;
-  RecordRules rules_;
-  std::unordered_map<uint32_t, DrawClass> classes_;
-  AtomicFile file_;
-  uint64_t first_record_line_ = 0;
-  uint64_t written_ = 0;
-  fmt::memory_buffer row_;
-};
-
-CsvWriter::CsvWriter(const std::string& path, const TraceHeader& header)
-    : header_(checkHeaderForWrite(path, header)), file_(path) {
-  rules_.width = header_.width;
-  rules_.height = header_.height;
-  rules_.draws = DrawSet(header_.draws);
-  for (const DrawInfo& d : header_.draws) classes_[d.id] = d.cls;
-  fmt::memory_buffer m;
-  auto out = std::back_inserter(m);
-  fmt::format_to(out, "# oitsim-trace v{}\n# width {}\n# height {}\n", header_.version, header_.width,
-                 header_.height);
-  if (header_.camera)
-    fmt::format_to(out, "# camera {} {}\n", header_.camera->near_plane, header_.camera->far_plane);
-  fmt::format_to(out, "# encoding {}\n", toString(header_.encoding));
-  for (const DrawInfo& d : header_.draws) {
-    fmt::format_to(out, "# draw {} {} {}\n", d.id, toString(d.cls), quoteName(d.name));
-    if (d.state) fmt::format_to(out, "# draw-state {}\n", drawStateCsv(d));
-  }
-  fmt::format_to(out, "{}\n", kColumnLine);
-  first_record_line_ = static_cast<uint64_t>(std::count(m.begin(), m.end(), '\n')) + 1;
-  file_.append(m.data(), m.size());
-}
-
-void CsvWriter::write(std::span<const Fragment> fs) {
-  if (file_.committed()) throw std::logic_error("FragmentSink::write after commit()");
-  const size_t bad = firstInvalid(fs, rules_);
-  const bool unorm8 = header_.encoding == ColourEncoding::Unorm8;
-  for (const Fragment& f0 : fs.first(bad)) {
-    Fragment f = f0;
-    if (unorm8) {
-      f.r = quantizeUnorm8(f.r);
-      f.g = quantizeUnorm8(f.g);
-      f.b = quantizeUnorm8(f.b);
-      f.a = quantizeUnorm8(f.a);
-    }
-    const int opaque = classes_.find(f.draw)->second == DrawClass::Opaque ? 1 : 0;
-    row_.clear();
-    fmt::format_to(std::back_inserter(row_), "{},{},{},{},{},{},{},{},{},{}\n", f.draw, f.prim, f.x,
-                   f.y, f.z, f.r, f.g, f.b, f.a, opaque);
-    file_.append(row_.data(), row_.size());
-    ++written_;
-  }
-  if (bad < fs.size()) {
-    const Violation v = *checkRecord(fs[bad], rules_);
-    throw TraceError::inCsv(file_.path(), first_record_line_ + written_, file_.size(), written_,
-                            fv::fieldName(v.field), v.message);
-  }
-}
-
 }  // namespace
 
 std::unique_ptr<FragmentSource> openCsvTrace(const std::string& path, const OpenOptions& opts) {
   return std::make_unique<CsvReader>(path, opts);
-}
-
-std::unique_ptr<FragmentSink> createCsvWriter(const std::string& path, const TraceHeader& header) {
-  return std::make_unique<CsvWriter>(path, header);
 }
 
 }  // namespace oit::detail
