@@ -36,12 +36,15 @@ TEST(StateRanges, InsideTheStateAndAddUpToTheRmwBytes) {
             for (unsigned i = 0; i < r.count; ++i) {
               EXPECT_LT(r.range[i].begin, r.range[i].end) << name;
               EXPECT_LE(r.range[i].end, a->bytesPerPixel()) << name;
-              if (i) EXPECT_GE(r.range[i].begin, r.range[i - 1].end) << name;
+              if (i) {
+                EXPECT_GE(r.range[i].begin, r.range[i - 1].end) << name;
+              }
             }
           }
           EXPECT_EQ(a->readRanges(pass, out).bytes(), a->readBytes(pass, out)) << name << " pass " << pass;
-          if (a->bounded())
+          if (a->bounded()) {
             EXPECT_EQ(a->writeRanges(pass, out).bytes(), a->writeBytes(pass, out)) << name << " pass " << pass;
+          }
         }
     }
   }

@@ -192,8 +192,11 @@ TEST(FormatBinary, BatchesCoverEveryRecordWhenCountIsNotAMultiple) {
     EXPECT_EQ(sizes[10], 7u);
     EXPECT_TRUE(src->next().empty());  // stays at the end
     EXPECT_EQ(src->position(), 10007u);
-    if (enc == ColourEncoding::Fp32) EXPECT_TRUE(bitEqual(got, fs));
-    else EXPECT_EQ(got.size(), fs.size());
+    if (enc == ColourEncoding::Fp32) {
+      EXPECT_TRUE(bitEqual(got, fs));
+    } else {
+      EXPECT_EQ(got.size(), fs.size());
+    }
   }
 }
 
