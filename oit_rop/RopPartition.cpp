@@ -83,7 +83,14 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
-  if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  if (write && ext->done >= last_write_done_) {
+    last_write_done_ = ext->done;
+    // A write into a shared level is done when its bytes crossed the level's
+    // port (CacheLevel::access: write-allocate, fills and victims posted), so
+    // it waited for that port, whatever DRAM traffic it started; without
+    // shared levels, for the DRAM controller's write queue.
+    last_write_wait_ = splitWait(now, ext->done, miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe(), miss_rest_);
+  }
   else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
@@ -379,8 +386,11 @@ void RopPartition::resolvePhase() {
       setStatus(Stage::Resolve, sorting ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
       root_.set(now, sorting ? RootCause::Sort : RootCause::Alu);
     } else if (window_blocked) {
-      setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-      root_.set(now, RootCause::DramBandwidth);
+      // The posted writes ran a window ahead: the resolve waits for what the
+      // latest write waits for (the l2's port with shared levels, not DRAM).
+      setStatus(Stage::Resolve, StageStatus::stall(miss_rest_ == RootCause::L2 ? Stall::CacheMissWait
+                                                                               : Stall::DramBandwidth));
+      root_.setWait(now, last_write_wait_);
     } else {
       setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
       root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
@@ -401,12 +411,15 @@ void RopPartition::resolvePhase() {
   // controller writes what its write queues still hold (MEMORY.md).
   // The root cause: the drain's own queueing by cause (its data on the bus
   // is bandwidth; the controller's bank, turnaround and refresh waits
-  // theirs); past the drain, the posted writes still in flight.
-  setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+  // theirs); past the drain, the posted writes still in flight: DRAM's
+  // without shared levels, the l2 port's with them (their last write waits
+  // for it; until issue 22 s5 it was charged dram_bandwidth with DRAM idle).
   memory_.resetProbe();
   const Cycle drained = memory_.drainWrites(now_);
   const Cycle end = std::max({now_, last_write_done_, drained});
-  root_.setWait(now_, splitWait(now_, end, memory_.probe(), RootCause::DramBandwidth));
+  const bool port_tail = miss_rest_ == RootCause::L2 && last_write_done_ > drained;
+  setStatus(Stage::Resolve, StageStatus::stall(port_tail ? Stall::CacheMissWait : Stall::DramBandwidth));
+  root_.setWait(now_, splitWait(now_, end, memory_.probe(), port_tail ? RootCause::L2 : RootCause::DramBandwidth));
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);

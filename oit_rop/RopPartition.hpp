@@ -264,7 +264,8 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
   std::vector<std::vector<uint32_t>> walk_nodes_;  // walkLists: each pixel's list (pool indices) in walk order
-  Cycle last_write_done_ = 0;
+  Cycle last_write_done_ = 0;  // the latest posted write's completion (the resolve's window)
+  WaitSplit last_write_wait_;  // what that write waited for (root causes of the window and the frame's tail)
   MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
   // The transparent passes' engine: one of the two (sim.engine).
