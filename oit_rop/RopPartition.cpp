@@ -180,20 +180,19 @@ void RopPartition::waitForFrontEnd() {
 // tile's pixels walk side by side (one read per pixel and step, of the node
 // at its place in the pool: NodePool::address of its index, so nodes allocated
 // together share lines and a pool that fits a cache level is read from it).
-// Then each pixel sorts what it
-// loaded (insertion sort, abuffer.sort_cycles_per_*; nodes past
-// abuffer.max_sorted spill at abuffer.spill_cycles_per_node, or are ignored
-// with truncate).
-RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready) {
+// Then each pixel sorts what it loaded (insertion sort,
+// abuffer.sort_cycles_per_*; nodes past abuffer.max_sorted spill at
+// abuffer.spill_cycles_per_node, or are ignored with truncate).
+Cycle RopPartition::prepareWalk(uint32_t tile, std::vector<std::vector<uint32_t>>& lists, uint32_t& longest) {
   const FrontEnd::PixelState px = front_.pixelState();
   const uint32_t tx = tile % geo_.tiles_x, ty = tile / geo_.tiles_x;
   const uint32_t x0 = tx * geo_.tile_w, y0 = ty * geo_.tile_h;
   const uint32_t x1 = std::min(geo_.width, x0 + geo_.tile_w), y1 = std::min(geo_.height, y0 + geo_.tile_h);
   const ABufferConfig& ab = cfg_.abuffer;
-  if (walk_nodes_.size() < size_t(geo_.tile_w) * geo_.tile_h) walk_nodes_.resize(size_t(geo_.tile_w) * geo_.tile_h);
+  lists.resize(size_t(geo_.tile_w) * geo_.tile_h);
   size_t pixels = 0;
-  uint32_t longest = 0;
-  ListWalk w;
+  longest = 0;
+  Cycle slowest = 0;
   for (uint32_t y = y0; y < y1; ++y)
     for (uint32_t x = x0; x < x1; ++x) {
       const uint32_t* words = px.words + (size_t(y) * px.width + x) * px.words_per_pixel;
@@ -202,29 +201,31 @@ RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready)
       // truncate walks and sorts max_sorted nodes, spill all of them.
       const uint32_t walked = rw.sorted;
       const uint32_t spilled = rw.sorted == rw.nodes ? rw.spilled : 0;
-      px.algo->listNodes(words, walked, walk_nodes_[pixels++]);
+      px.algo->listNodes(words, walked, lists[pixels++]);
       longest = std::max(longest, walked);
       const Cycle sort = Cycle(rw.compares) * ab.sort_cycles_per_compare + Cycle(rw.moves) * ab.sort_cycles_per_move +
                          Cycle(spilled) * ab.spill_cycles_per_node;
-      w.sort_cycles = std::max(w.sort_cycles, sort);
+      slowest = std::max(slowest, sort);
       res_.list_nodes_walked += walked;
       res_.sort_cycles += sort;
     }
-  // Step i reads the i-th node of every pixel whose list is that long, once
-  // step i - 1's reads are back.
-  Cycle t = heads_ready;
-  for (uint32_t i = 0; i < longest; ++i) {
-    Cycle step = t;
-    for (size_t j = 0; j < pixels; ++j) {
-      if (walk_nodes_[j].size() <= i) continue;
-      step = std::max(step, access(t, s_.pool->address(walk_nodes_[j][i]), s_.node_bytes, false, Surface::BlendArrays));
-      res_.node_bytes_read += s_.node_bytes;
-    }
-    res_.list_walk_cycles += step - t;
-    t = step;
+  for (size_t j = pixels; j < lists.size(); ++j) lists[j].clear();  // pixels past the frame's edge
+  return slowest;
+}
+
+Cycle RopPartition::walkStep(const std::vector<std::vector<uint32_t>>& lists, uint32_t step, Cycle now) {
+  // Issued when the previous step's reads are back (the resolve calls it at
+  // that cycle, in time order with the partition's other requests: a walk
+  // booked ahead all at once moved the shared levels' port calendars on and
+  // pushed the other requests to their ring's oldest cycle, issue 22 s5).
+  Cycle done = now;
+  for (const auto& l : lists) {
+    if (l.size() <= step) continue;
+    done = std::max(done, access(now, s_.pool->address(l[step]), s_.node_bytes, false, Surface::BlendArrays));
+    res_.node_bytes_read += s_.node_bytes;
   }
-  w.ready = t;
-  return w;
+  res_.list_walk_cycles += done - now;
+  return done;
 }
 
 void RopPartition::resolvePhase() {
@@ -243,7 +244,8 @@ void RopPartition::resolvePhase() {
       ++res_.tiles_skipped_fast_clear;
   }
   const double px_per_clock = std::max(1e-6, double(cfg_.alu.blends_per_clock) * s_.format_rate);
-  Fifo<ResolveEntry> pf(16);
+  std::deque<ResolveEntry> pf;
+  if (!s_.bounded && walk_nodes_.size() < kResolvePrefetch) walk_nodes_.resize(kResolvePrefetch);
   size_t next_issue = 0;
   bool computing = false;
   uint32_t computing_tile = 0;
@@ -341,20 +343,30 @@ void RopPartition::resolvePhase() {
       };
       if (front_.opaqueLanded()[t] != 0)
         input(access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour));
-      Cycle sort = 0;
+      ResolveEntry e{t, data, 0, wait};
       if (!s_.bounded && front_.tileNodes()[t] != 0) {
         // The list walk's reads depend on each other: the chain, not a
-        // resource, holds the tile (root cause list_walk).
-        const ListWalk w = walkLists(t, data);
-        if (w.ready > data) {
-          wait = splitWait(now, w.ready, DramProbe{}, RootCause::ListWalk);
-          data = w.ready;
+        // resource, holds the tile (root cause list_walk). It starts when
+        // the heads are there; the steps issue above, in time.
+        e.slot = uint32_t(next_issue % kResolvePrefetch);  // at most kResolvePrefetch consecutive tiles in pf
+        e.sort = prepareWalk(t, walk_nodes_[e.slot], e.steps);
+        if (e.steps) {
+          e.step_at = data;
+          e.ready = kNever;
+          e.wait = WaitSplit{now, now, now, RootCause::ListWalk};
         }
-        sort = w.sort_cycles;
       }
-      pf.push({t, data, sort, wait});
+      pf.push_back(e);
       ++next_issue;
       ++acquired;
+      moved = true;
+    }
+    // The list walks in progress (a tile issued above starts now if its heads
+    // are there): each step issues when the previous one's reads are back.
+    for (ResolveEntry& e : pf) {
+      if (e.step == e.steps || e.step_at > now) continue;
+      e.step_at = walkStep(walk_nodes_[e.slot], e.step++, now);
+      if (e.step == e.steps) e.ready = e.step_at;
       moved = true;
     }
     bool window_blocked = false;
@@ -364,7 +376,7 @@ void RopPartition::resolvePhase() {
       } else {
         const uint32_t t = pf.front().tile;
         const Cycle sort = pf.front().sort;
-        pf.pop();
+        pf.pop_front();
         computing_pins = std::move(pf_pins.front());
         pf_pins.pop_front();
         uint64_t work = geo_.tilePixels();
@@ -400,6 +412,8 @@ void RopPartition::resolvePhase() {
       next = kNever;
       if (computing) next = std::min(next, now < sort_done ? sort_done : compute_done);
       if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
+      for (const ResolveEntry& e : pf)
+        if (e.step < e.steps) next = std::min(next, e.step_at);
       if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
       if (refused) next = std::min(next, retry_at_);
       if (!computing && !pf.empty() && pf.front().ready <= now && !window_blocked) next = now + 1;
