@@ -22,10 +22,6 @@ namespace {
 
 class AbufferWalkInTime : public ::testing::TestWithParam<SimEngine> {};
 
-uint64_t cause(const ChildRun& r, const char* key) {
-  return r.stats["timing"]["root_cause_cycles"][key].get<uint64_t>();
-}
-
 // Three 8x8 tiles in a row, one partition: one node in tile 0, one in tile 1,
 // a list of 200 in one pixel of tile 2 (fp32 nodes, 24 B), sorting free. The
 // l2 (1 MiB, one slice of 64 B/clock, hit latency 50) holds the nodes, and
@@ -66,7 +62,7 @@ TEST_P(AbufferWalkInTime, TheResolveNeverWaitsForAnIdlePort) {
   const auto& rc = r.stats["timing"]["root_cause_cycles"];
   const uint64_t resolve = r.stats["timing"]["phase_cycles"]["resolve"].get<uint64_t>();
   EXPECT_EQ(r.stats["memory"]["node_pool_bytes_read"].get<uint64_t>(), 202u * 24);
-  EXPECT_EQ(cause(r, "l2"), 4u) << rc.dump();
+  EXPECT_EQ(rc["l2"].get<uint64_t>(), 4u) << rc.dump();
   EXPECT_EQ(r.stats["timing"]["stages"]["resolve"]["busy"].get<uint64_t>(), 128u + 128 + 400);
   EXPECT_EQ(r.stats["timing"]["stages"]["resolve"]["stalls"]["list_walk"].get<uint64_t>(), resolve - 656 - 4) << rc.dump();
   const uint64_t walk_end = resolve - 404;

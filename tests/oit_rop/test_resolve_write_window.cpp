@@ -25,6 +25,25 @@ uint64_t cause(const ChildRun& r, const char* key) {
   return r.stats["timing"]["root_cause_cycles"][key].get<uint64_t>();
 }
 
+// One partition, a fixed shader latency, 4 blends per clock.
+RopConfig onePartition(SimEngine engine) {
+  RopConfig c = smallConfig();
+  c.sim.engine = engine;
+  c.partitions.count = 1;
+  c.input.latency_model = LatencyModel::Fixed;
+  c.input.latency_min = 40;
+  c.alu.blends_per_clock = 4;
+  return c;
+}
+
+// 16x16 pixels, one layer of alpha blending in rgba8 (4 B per pixel).
+ChildRun alphaFrame(const RopConfig& c) {
+  model::AlgorithmParams p;
+  p.format = model::StorageFormat::Rgba8T8Z32;
+  const auto fs = layerSweeps(16, 16, 1, 1.0f / 1024.0f);
+  return runInChild([&] { return timed("alpha", p, fs, 16, 16, c); });
+}
+
 // 16x16 pixels, one layer of alpha blending (rgba8: 4 B per pixel), one
 // partition, 8x8 tiles: 4 tiles. The arrays (1 KiB) stay in the 64 KiB ROP
 // cache, so the l2 sees only the resolve's colour writes, 256 B per tile, over
@@ -40,20 +59,12 @@ uint64_t cause(const ChildRun& r, const char* key) {
 //  - the frame ends when that write is done: a tail of 4096 - 2064 = 2032.
 // 1008 + 1008 + 2032 = 4048 cycles wait for the l2 port; DRAM moves nothing.
 TEST_P(ResolveWriteWindow, WaitsForTheL2PortNotDram) {
-  RopConfig c = smallConfig();
-  c.sim.engine = GetParam();
-  c.partitions.count = 1;
-  c.input.latency_model = LatencyModel::Fixed;
-  c.input.latency_min = 40;
-  c.alu.blends_per_clock = 4;
+  RopConfig c = onePartition(GetParam());
   c.l2.size_bytes = 64 * 1024;
   c.l2.ways = 16;
   c.l2.slices = 1;
   c.l2.bytes_per_clock = 0.25;
-  model::AlgorithmParams p;
-  p.format = model::StorageFormat::Rgba8T8Z32;
-  const auto fs = layerSweeps(16, 16, 1, 1.0f / 1024.0f);
-  const auto r = runInChild([&] { return timed("alpha", p, fs, 16, 16, c); });
+  const auto r = alphaFrame(c);
   ASSERT_TRUE(r.ok) << r.error;
   const auto& m = r.stats["memory"];
   ASSERT_EQ(m["dram_read_bytes"]["total"].get<uint64_t>() + m["dram_write_bytes"]["total"].get<uint64_t>(), 0u);
@@ -85,16 +96,7 @@ TEST_P(ResolveWriteWindow, WaitsForTheL2PortNotDram) {
 // queue, which takes them at once (4 x 256 B fit it): no window wait, and the
 // frame's tail is the drain of the queue, DRAM's causes (none of it `l2`).
 TEST_P(ResolveWriteWindow, WithoutSharedLevelsTheTailIsDram) {
-  RopConfig c = smallConfig();
-  c.sim.engine = GetParam();
-  c.partitions.count = 1;
-  c.input.latency_model = LatencyModel::Fixed;
-  c.input.latency_min = 40;
-  c.alu.blends_per_clock = 4;
-  model::AlgorithmParams p;
-  p.format = model::StorageFormat::Rgba8T8Z32;
-  const auto fs = layerSweeps(16, 16, 1, 1.0f / 1024.0f);
-  const auto r = runInChild([&] { return timed("alpha", p, fs, 16, 16, c); });
+  const auto r = alphaFrame(onePartition(GetParam()));
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_EQ(r.stats["memory"]["dram_write_bytes"]["total"].get<uint64_t>(), 4u * 256);
   EXPECT_EQ(cause(r, "l2"), 0u);
