@@ -89,7 +89,8 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
     // port (CacheLevel::access: write-allocate, fills and victims posted), so
     // it waited for that port, whatever DRAM traffic it started; without
     // shared levels, for the DRAM controller's write queue.
-    last_write_wait_ = splitWait(now, ext->done, miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe(), miss_rest_);
+    const DramProbe d = miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe();
+    last_write_wait_ = splitWait(now, ext->done, d, miss_rest_);
   }
   else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;

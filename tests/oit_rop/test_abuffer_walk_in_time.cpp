@@ -45,7 +45,8 @@ TEST_P(AbufferWalkInTime, TheResolveNeverWaitsForAnIdlePort) {
   fs.push_back(frag(0, 0, 0.5f, 0.5f, 0.25f, 0.125f, 0.25f, model::testutil::kTranspDraw, prim++));
   fs.push_back(frag(8, 0, 0.5f, 0.5f, 0.25f, 0.125f, 0.25f, model::testutil::kTranspDraw, prim++));
   for (unsigned i = 0; i < 200; ++i)
-    fs.push_back(frag(16, 0, 0.9f - 0.004f * float(i), 0.5f, 0.25f, 0.125f, 0.25f, model::testutil::kTranspDraw, prim++));
+    fs.push_back(
+        frag(16, 0, 0.9f - 0.004f * float(i), 0.5f, 0.25f, 0.125f, 0.25f, model::testutil::kTranspDraw, prim++));
   RopConfig c = smallConfig();
   c.partitions.count = 1;
   c.sim.engine = GetParam();
@@ -64,7 +65,8 @@ TEST_P(AbufferWalkInTime, TheResolveNeverWaitsForAnIdlePort) {
   EXPECT_EQ(r.stats["memory"]["node_pool_bytes_read"].get<uint64_t>(), 202u * 24);
   EXPECT_EQ(rc["l2"].get<uint64_t>(), 4u) << rc.dump();
   EXPECT_EQ(r.stats["timing"]["stages"]["resolve"]["busy"].get<uint64_t>(), 128u + 128 + 400);
-  EXPECT_EQ(r.stats["timing"]["stages"]["resolve"]["stalls"]["list_walk"].get<uint64_t>(), resolve - 656 - 4) << rc.dump();
+  EXPECT_EQ(r.stats["timing"]["stages"]["resolve"]["stalls"]["list_walk"].get<uint64_t>(), resolve - 656 - 4)
+      << rc.dump();
   const uint64_t walk_end = resolve - 404;
   EXPECT_GE(walk_end, 11u + 200 * 50);
   // The partly written burst's fill is one DRAM read (DESIGN.md: about 70
