@@ -83,7 +83,15 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
-  if (write) last_write_done_ = std::max(last_write_done_, ext->done);
+  if (write && ext->done >= last_write_done_) {
+    last_write_done_ = ext->done;
+    // A write into a shared level is done when its bytes crossed the level's
+    // port (CacheLevel::access: write-allocate, fills and victims posted), so
+    // it waited for that port, whatever DRAM traffic it started; without
+    // shared levels, for the DRAM controller's write queue.
+    const DramProbe d = miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe();
+    last_write_wait_ = splitWait(now, ext->done, d, miss_rest_);
+  }
   else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
@@ -173,20 +181,19 @@ void RopPartition::waitForFrontEnd() {
 // tile's pixels walk side by side (one read per pixel and step, of the node
 // at its place in the pool: NodePool::address of its index, so nodes allocated
 // together share lines and a pool that fits a cache level is read from it).
-// Then each pixel sorts what it
-// loaded (insertion sort, abuffer.sort_cycles_per_*; nodes past
-// abuffer.max_sorted spill at abuffer.spill_cycles_per_node, or are ignored
-// with truncate).
-RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready) {
+// Then each pixel sorts what it loaded (insertion sort,
+// abuffer.sort_cycles_per_*; nodes past abuffer.max_sorted spill at
+// abuffer.spill_cycles_per_node, or are ignored with truncate).
+Cycle RopPartition::prepareWalk(uint32_t tile, std::vector<std::vector<uint32_t>>& lists, uint32_t& longest) {
   const FrontEnd::PixelState px = front_.pixelState();
   const uint32_t tx = tile % geo_.tiles_x, ty = tile / geo_.tiles_x;
   const uint32_t x0 = tx * geo_.tile_w, y0 = ty * geo_.tile_h;
   const uint32_t x1 = std::min(geo_.width, x0 + geo_.tile_w), y1 = std::min(geo_.height, y0 + geo_.tile_h);
   const ABufferConfig& ab = cfg_.abuffer;
-  if (walk_nodes_.size() < size_t(geo_.tile_w) * geo_.tile_h) walk_nodes_.resize(size_t(geo_.tile_w) * geo_.tile_h);
+  lists.resize(size_t(geo_.tile_w) * geo_.tile_h);
   size_t pixels = 0;
-  uint32_t longest = 0;
-  ListWalk w;
+  longest = 0;
+  Cycle slowest = 0;
   for (uint32_t y = y0; y < y1; ++y)
     for (uint32_t x = x0; x < x1; ++x) {
       const uint32_t* words = px.words + (size_t(y) * px.width + x) * px.words_per_pixel;
@@ -195,29 +202,31 @@ RopPartition::ListWalk RopPartition::walkLists(uint32_t tile, Cycle heads_ready)
       // truncate walks and sorts max_sorted nodes, spill all of them.
       const uint32_t walked = rw.sorted;
       const uint32_t spilled = rw.sorted == rw.nodes ? rw.spilled : 0;
-      px.algo->listNodes(words, walked, walk_nodes_[pixels++]);
+      px.algo->listNodes(words, walked, lists[pixels++]);
       longest = std::max(longest, walked);
       const Cycle sort = Cycle(rw.compares) * ab.sort_cycles_per_compare + Cycle(rw.moves) * ab.sort_cycles_per_move +
                          Cycle(spilled) * ab.spill_cycles_per_node;
-      w.sort_cycles = std::max(w.sort_cycles, sort);
+      slowest = std::max(slowest, sort);
       res_.list_nodes_walked += walked;
       res_.sort_cycles += sort;
     }
-  // Step i reads the i-th node of every pixel whose list is that long, once
-  // step i - 1's reads are back.
-  Cycle t = heads_ready;
-  for (uint32_t i = 0; i < longest; ++i) {
-    Cycle step = t;
-    for (size_t j = 0; j < pixels; ++j) {
-      if (walk_nodes_[j].size() <= i) continue;
-      step = std::max(step, access(t, s_.pool->address(walk_nodes_[j][i]), s_.node_bytes, false, Surface::BlendArrays));
-      res_.node_bytes_read += s_.node_bytes;
-    }
-    res_.list_walk_cycles += step - t;
-    t = step;
+  for (size_t j = pixels; j < lists.size(); ++j) lists[j].clear();  // pixels past the frame's edge
+  return slowest;
+}
+
+Cycle RopPartition::walkStep(const std::vector<std::vector<uint32_t>>& lists, uint32_t step, Cycle now) {
+  // Issued when the previous step's reads are back (the resolve calls it at
+  // that cycle, in time order with the partition's other requests: a walk
+  // booked ahead all at once moved the shared levels' port calendars on and
+  // pushed the other requests to their ring's oldest cycle, issue 22 s5).
+  Cycle done = now;
+  for (const auto& l : lists) {
+    if (l.size() <= step) continue;
+    done = std::max(done, access(now, s_.pool->address(l[step]), s_.node_bytes, false, Surface::BlendArrays));
+    res_.node_bytes_read += s_.node_bytes;
   }
-  w.ready = t;
-  return w;
+  res_.list_walk_cycles += done - now;
+  return done;
 }
 
 void RopPartition::resolvePhase() {
@@ -236,7 +245,8 @@ void RopPartition::resolvePhase() {
       ++res_.tiles_skipped_fast_clear;
   }
   const double px_per_clock = std::max(1e-6, double(cfg_.alu.blends_per_clock) * s_.format_rate);
-  Fifo<ResolveEntry> pf(16);
+  std::deque<ResolveEntry> pf;
+  if (!s_.bounded && walk_nodes_.size() < kResolvePrefetch) walk_nodes_.resize(kResolvePrefetch);
   size_t next_issue = 0;
   bool computing = false;
   uint32_t computing_tile = 0;
@@ -334,20 +344,30 @@ void RopPartition::resolvePhase() {
       };
       if (front_.opaqueLanded()[t] != 0)
         input(access(now, s_.map.colour + uint64_t(t) * s_.map.tile4_bytes, s_.map.tile4_bytes, false, Surface::Colour));
-      Cycle sort = 0;
+      ResolveEntry e{t, data, 0, wait};
       if (!s_.bounded && front_.tileNodes()[t] != 0) {
         // The list walk's reads depend on each other: the chain, not a
-        // resource, holds the tile (root cause list_walk).
-        const ListWalk w = walkLists(t, data);
-        if (w.ready > data) {
-          wait = splitWait(now, w.ready, DramProbe{}, RootCause::ListWalk);
-          data = w.ready;
+        // resource, holds the tile (root cause list_walk). It starts when
+        // the heads are there; the steps issue above, in time.
+        e.slot = uint32_t(next_issue % kResolvePrefetch);  // at most kResolvePrefetch consecutive tiles in pf
+        e.sort = prepareWalk(t, walk_nodes_[e.slot], e.steps);
+        if (e.steps) {
+          e.step_at = data;
+          e.ready = kNever;
+          e.wait = WaitSplit{now, now, now, RootCause::ListWalk};
         }
-        sort = w.sort_cycles;
       }
-      pf.push({t, data, sort, wait});
+      pf.push_back(e);
       ++next_issue;
       ++acquired;
+      moved = true;
+    }
+    // The list walks in progress (a tile issued above starts now if its heads
+    // are there): each step issues when the previous one's reads are back.
+    for (ResolveEntry& e : pf) {
+      if (e.step == e.steps || e.step_at > now) continue;
+      e.step_at = walkStep(walk_nodes_[e.slot], e.step++, now);
+      if (e.step == e.steps) e.ready = e.step_at;
       moved = true;
     }
     bool window_blocked = false;
@@ -357,7 +377,7 @@ void RopPartition::resolvePhase() {
       } else {
         const uint32_t t = pf.front().tile;
         const Cycle sort = pf.front().sort;
-        pf.pop();
+        pf.pop_front();
         computing_pins = std::move(pf_pins.front());
         pf_pins.pop_front();
         uint64_t work = geo_.tilePixels();
@@ -379,8 +399,11 @@ void RopPartition::resolvePhase() {
       setStatus(Stage::Resolve, sorting ? StageStatus::stall(Stall::Sort) : StageStatus::busy());
       root_.set(now, sorting ? RootCause::Sort : RootCause::Alu);
     } else if (window_blocked) {
-      setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
-      root_.set(now, RootCause::DramBandwidth);
+      // The posted writes ran a window ahead: the resolve waits for what the
+      // latest write waits for (the l2's port with shared levels, not DRAM).
+      setStatus(Stage::Resolve, StageStatus::stall(miss_rest_ == RootCause::L2 ? Stall::CacheMissWait
+                                                                               : Stall::DramBandwidth));
+      root_.setWait(now, last_write_wait_);
     } else {
       setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
       root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
@@ -390,6 +413,8 @@ void RopPartition::resolvePhase() {
       next = kNever;
       if (computing) next = std::min(next, now < sort_done ? sort_done : compute_done);
       if (!pf.empty() && pf.front().ready > now) next = std::min(next, pf.front().ready);
+      for (const ResolveEntry& e : pf)
+        if (e.step < e.steps) next = std::min(next, e.step_at);
       if (window_blocked) next = std::min(next, last_write_done_ - kPostedWindow);
       if (refused) next = std::min(next, retry_at_);
       if (!computing && !pf.empty() && pf.front().ready <= now && !window_blocked) next = now + 1;
@@ -401,12 +426,15 @@ void RopPartition::resolvePhase() {
   // controller writes what its write queues still hold (MEMORY.md).
   // The root cause: the drain's own queueing by cause (its data on the bus
   // is bandwidth; the controller's bank, turnaround and refresh waits
-  // theirs); past the drain, the posted writes still in flight.
-  setStatus(Stage::Resolve, StageStatus::stall(Stall::DramBandwidth));
+  // theirs); past the drain, the posted writes still in flight: DRAM's
+  // without shared levels, the l2 port's with them (their last write waits
+  // for it; until issue 22 s5 it was charged dram_bandwidth with DRAM idle).
   memory_.resetProbe();
   const Cycle drained = memory_.drainWrites(now_);
   const Cycle end = std::max({now_, last_write_done_, drained});
-  root_.setWait(now_, splitWait(now_, end, memory_.probe(), RootCause::DramBandwidth));
+  const bool port_tail = miss_rest_ == RootCause::L2 && last_write_done_ > drained;
+  setStatus(Stage::Resolve, StageStatus::stall(port_tail ? Stall::CacheMissWait : Stall::DramBandwidth));
+  root_.setWait(now_, splitWait(now_, end, memory_.probe(), port_tail ? RootCause::L2 : RootCause::DramBandwidth));
   if (end > now_) {
     if (cfg_.skip.idle_cycles)
       advance(end, true);

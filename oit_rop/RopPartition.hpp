@@ -129,15 +129,20 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   };
   struct ResolveEntry {
     uint32_t tile;
-    Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there
+    Cycle ready;  // the tile's line, opaque colour and (A-buffer) node lists are all there (kNever: walking)
     Cycle sort;   // A-buffer: the tile's slowest per-pixel sort, cycles
     WaitSplit wait;  // what the tile's inputs waited for (root causes)
+    // A-buffer: the list walk in progress (walk_nodes_[slot]: each pixel's
+    // list), its next step and the cycle that step's reads issue.
+    uint32_t slot = 0, step = 0, steps = 0;
+    Cycle step_at = 0;
   };
-  struct ListWalk {
-    Cycle ready = 0;        // the last node of the tile's longest list is read
-    Cycle sort_cycles = 0;  // the tile's slowest pixel sort
-  };
-  ListWalk walkLists(uint32_t tile, Cycle heads_ready);
+  // The tile's lists into `lists` (one per pixel, in walk order); returns the
+  // tile's slowest pixel sort, `longest` its longest list.
+  Cycle prepareWalk(uint32_t tile, std::vector<std::vector<uint32_t>>& lists, uint32_t& longest);
+  // Issues step `step` of a walk at `now` (the step-th node of every list
+  // that long); returns when the last of those reads is back.
+  Cycle walkStep(const std::vector<std::vector<uint32_t>>& lists, uint32_t step, Cycle now);
 
   void run();
   // now_ = next, skip count, quantum keeper. Inline (with the helpers below):
@@ -263,8 +268,10 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   WaitSplit last_depth_;      // the latest depth-tile read's wait
   RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile
-  std::vector<std::vector<uint32_t>> walk_nodes_;  // walkLists: each pixel's list (pool indices) in walk order
-  Cycle last_write_done_ = 0;
+  // The list walks in progress: per prefetch slot, each pixel's list (pool indices) in walk order.
+  std::vector<std::vector<std::vector<uint32_t>>> walk_nodes_;
+  Cycle last_write_done_ = 0;  // the latest posted write's completion (the resolve's window)
+  WaitSplit last_write_wait_;  // what that write waited for (root causes of the window and the frame's tail)
   MemorySystem& memory_;  // the shared DRAM: its write queues drain at the partition's end
   bool done_ = false;
   // The transparent passes' engine: one of the two (sim.engine).
