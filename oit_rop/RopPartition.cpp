@@ -83,16 +83,19 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
   memory_.resetProbe();
   dram->b_transport(payload_, delay);
   if (!payload_.is_response_ok()) throw std::runtime_error("DramSystem refused a transfer");
-  if (write && ext->done >= last_write_done_) {
-    last_write_done_ = ext->done;
-    // A write into a shared level is done when its bytes crossed the level's
-    // port (CacheLevel::access: write-allocate, fills and victims posted), so
-    // it waited for that port, whatever DRAM traffic it started; without
-    // shared levels, for the DRAM controller's write queue.
-    const DramProbe d = miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe();
-    last_write_wait_ = splitWait(now, ext->done, d, miss_rest_);
+  if (write) {
+    if (ext->done >= last_write_done_) {
+      last_write_done_ = ext->done;
+      // A write into a shared level is done when its bytes crossed the level's
+      // port (CacheLevel::access: write-allocate, fills and victims posted), so
+      // it waited for that port, whatever DRAM traffic it started; without
+      // shared levels, for the DRAM controller's write queue.
+      const DramProbe d = miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe();
+      last_write_wait_ = splitWait(now, ext->done, d, miss_rest_);
+    }
+  } else if (s == Surface::Depth) {
+    last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   }
-  else if (s == Surface::Depth) last_depth_ = splitWait(now, ext->done, memory_.probe(), miss_rest_);
   return ext->done;
 }
 
