@@ -115,6 +115,22 @@ void ApproximateEngine::run() {
   // new cursor is taken after anything may have pushed to it.
   auto& q = p.front_.queue(p.id_);
   auto in = q.cursor();
+  // The partition's time to t (later than now): p.advance() yields at a
+  // quantum boundary, and then the sampler reads the calendars (retired up to
+  // calendars_at first) and the front end the queue (the cursor's head back).
+  // Always inlined: per fragment (small scene: 2,185.0 instructions per record
+  // with it, 2,189.9 without, 2,185.5 as two written-out copies).
+  auto moveTo = [&](Cycle t, Cycle calendars_at) __attribute__((always_inline)) {
+    if (t <= p.now_) return;
+    if (t >= p.next_sync_) {
+      retireCalendars(calendars_at);
+      q.setHead(in);
+      p.advance(t, false);
+      in = q.cursor();
+    } else {
+      p.advance(t, false);
+    }
+  };
   for (;;) {
     if (in.empty()) {
       q.setHead(in);
@@ -197,16 +213,7 @@ void ApproximateEngine::run() {
       if (issue > settle_lag) shares.settle(p.root_, issue - settle_lag);
       charged = issue;
     }
-    if (issue > p.now_) {
-      if (issue >= p.next_sync_) {  // p.advance() yields: the sampler reads the calendars, the front end the queue
-        retireCalendars(p.now_);
-        q.setHead(in);
-        p.advance(issue, false);
-        in = q.cursor();
-      } else {
-        p.advance(issue, false);
-      }
-    }
+    moveTo(issue, p.now_);
     tl[0].add(acc[0], issue, issue + 1, kBusy, gap0);
     gap0 = kBusy;
     alu_slots.retireBefore(issue);  // no blend of this or a later fragment starts before its issue
@@ -286,14 +293,7 @@ void ApproximateEngine::run() {
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
         at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
-        if (at_cache >= p.next_sync_) {  // p.advance() yields (as for an issue, above)
-          retireCalendars(visit_now);
-          q.setHead(in);
-          p.advance(at_cache, false);
-          in = q.cursor();
-        } else if (at_cache > p.now_) {
-          p.advance(at_cache, false);
-        }
+        moveTo(at_cache, visit_now);
         p.memory_.resetProbe();
         misses = p.cache_.stats().misses;
         got = p.cache_.touch(at_cache, tile, lines, missed);
