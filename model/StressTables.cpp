@@ -127,7 +127,10 @@ std::string toMarkdown(const std::vector<StressRow>& rows, const std::string& co
           if (std::isnan(r.max_abs_error)) nan = true;
           else if (r.status != RowStatus::Error) worst = std::max(worst, r.max_abs_error);
         }
-      s += " " + (nan ? std::string("nan") : worst < 0 ? std::string("n/a") : num(worst)) + (v ? " !" : "") + " |";
+      // Appended piece by piece: GCC 12's -Wrestrict misfires on " " + string.
+      s += ' ';
+      s += nan ? std::string("nan") : worst < 0 ? std::string("n/a") : num(worst);
+      s += v ? " ! |" : " |";
     }
     s += "\n";
   }

@@ -17,6 +17,9 @@ namespace {
 constexpr unsigned kResolvePrefetch = 8;  // tiles whose lines are fetched ahead of the resolve
 constexpr Cycle kPostedWindow = 1024;     // posted DRAM writes may run this far ahead
 uint8_t dummy_data[1];
+// Whether a posted write waits for the l2's port (shared levels present, a
+// miss's rest is RootCause::L2) rather than DRAM's write queue: see access().
+bool writesWaitForL2Port(RootCause miss_rest) { return miss_rest == RootCause::L2; }
 }  // namespace
 
 RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const PartitionSetup& setup,
@@ -90,7 +93,7 @@ Cycle RopPartition::access(Cycle now, uint64_t addr, uint32_t bytes, bool write,
       // port (CacheLevel::access: write-allocate, fills and victims posted), so
       // it waited for that port, whatever DRAM traffic it started; without
       // shared levels, for the DRAM controller's write queue.
-      const DramProbe d = miss_rest_ == RootCause::L2 ? DramProbe{} : memory_.probe();
+      const DramProbe d = writesWaitForL2Port(miss_rest_) ? DramProbe{} : memory_.probe();
       last_write_wait_ = splitWait(now, ext->done, d, miss_rest_);
     }
   } else if (s == Surface::Depth) {
@@ -404,8 +407,8 @@ void RopPartition::resolvePhase() {
     } else if (window_blocked) {
       // The posted writes ran a window ahead: the resolve waits for what the
       // latest write waits for (the l2's port with shared levels, not DRAM).
-      setStatus(Stage::Resolve, StageStatus::stall(miss_rest_ == RootCause::L2 ? Stall::CacheMissWait
-                                                                               : Stall::DramBandwidth));
+      setStatus(Stage::Resolve,
+                StageStatus::stall(writesWaitForL2Port(miss_rest_) ? Stall::CacheMissWait : Stall::DramBandwidth));
       root_.setWait(now, last_write_wait_);
     } else {
       setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
@@ -435,7 +438,7 @@ void RopPartition::resolvePhase() {
   memory_.resetProbe();
   const Cycle drained = memory_.drainWrites(now_);
   const Cycle end = std::max({now_, last_write_done_, drained});
-  const bool port_tail = miss_rest_ == RootCause::L2 && last_write_done_ > drained;
+  const bool port_tail = writesWaitForL2Port(miss_rest_) && last_write_done_ > drained;
   setStatus(Stage::Resolve, StageStatus::stall(port_tail ? Stall::CacheMissWait : Stall::DramBandwidth));
   root_.setWait(now_, splitWait(now_, end, memory_.probe(), port_tail ? RootCause::L2 : RootCause::DramBandwidth));
   if (end > now_) {

@@ -37,7 +37,10 @@ std::string scalarText(const ojson& v, const std::string& where) {
   if (v.is_number()) return v.dump();
   if (v.is_array()) {  // background: r,g,b
     std::string s;
-    for (const auto& e : v) s += (s.empty() ? "" : ",") + scalarText(e, where);
+    for (const auto& e : v) {
+      if (!s.empty()) s += ',';  // appended apart: GCC 12's -Wrestrict misfires on "," + string
+      s += scalarText(e, where);
+    }
     return s;
   }
   throw std::invalid_argument(where + ": expected a string, number or boolean, got " + v.dump());

@@ -206,8 +206,9 @@ class CsvReader final : public FragmentSource {
   }
   // Parses the current line as record `record`; in pass 1 unknown draws join the table.
   Fragment parseRow(uint64_t record, bool first_pass);
-  // Next data line (skips blank and comment lines); false at end of file.
-  bool nextDataLine();
+  // The next line that is neither blank nor a comment (the column line, then
+  // the data lines); comment lines go to parseMetadata. False at end of file.
+  bool nextContentLine();
 
   std::string path_;
   TraceHeader header_;
@@ -239,25 +240,13 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
     struct stat st {};
     if (::fstat(in_.fd(), &st) == 0) size_at_open_ = static_cast<uint64_t>(st.st_size);
   }
-  // Comment header, up to the column line.
-  bool found_columns = false;
-  while (in_.next()) {
-    const std::string_view line = in_.line();
-    if (allBlank(line)) continue;
-    if (line.front() == '#') {
-      parseMetadata(line);
-      continue;
-    }
-    if (line != kCsvColumnLine)
-      fail(in_.offset(), std::nullopt, "header",
-           fmt::format("expected the column line '{}', found '{}'", kCsvColumnLine,
-                       line.substr(0, 80)));
-    found_columns = true;
-    break;
-  }
-  if (!found_columns)  // lines are 1-based: an empty file's error is on line 1
+  // Comment header (its metadata lines go to parseMetadata), up to the column line.
+  if (!nextContentLine())  // lines are 1-based: an empty file's error is on line 1
     throw TraceError::inCsv(path_, std::max<uint64_t>(in_.number(), 1), in_.nextOffset(), std::nullopt, "header",
                             fmt::format("no column line '{}' (empty file or only comments)", kCsvColumnLine));
+  if (const std::string_view line = in_.line(); line != kCsvColumnLine)
+    fail(in_.offset(), std::nullopt, "header",
+         fmt::format("expected the column line '{}', found '{}'", kCsvColumnLine, line.substr(0, 80)));
   data_offset_ = in_.nextOffset();
   data_line_ = in_.number() + 1;
 
@@ -283,7 +272,7 @@ CsvReader::CsvReader(const std::string& path, const OpenOptions& opts)
 
   // Pass 1: validate every row, count them, complete the draw table.
   uint64_t count = 0;
-  while (nextDataLine()) parseRow(count++, true);
+  while (nextContentLine()) parseRow(count++, true);
   header_.fragment_count = count;
   rules_.draws = DrawSet(header_.draws);
   buf_.resize(static_cast<size_t>(std::min<uint64_t>(batch_, count)));
@@ -307,12 +296,13 @@ void CsvReader::refuseBinaryForms() {
                             fmt::format("found {}: the file is gzip-compressed: decompress first (gunzip)", hex()));
 }
 
-bool CsvReader::nextDataLine() {
+bool CsvReader::nextContentLine() {
   while (in_.next()) {
     const std::string_view line = in_.line();
     if (allBlank(line)) continue;
     if (line.front() == '#') {
-      // Metadata after the column line would be silently ignored: refuse it.
+      // Metadata: read in the header; after the column line, where it would be
+      // silently ignored, parseMetadata refuses it.
       parseMetadata(line);
       continue;
     }
@@ -544,7 +534,7 @@ std::span<const Fragment> CsvReader::next() {
                                         st.st_size, size_at_open_));
   size_t n = 0;
   while (n < buf_.size() && pos_ + n < header_.fragment_count) {
-    if (!nextDataLine())
+    if (!nextContentLine())
       throw TraceError::inCsv(path_, in_.number(), in_.nextOffset(), pos_ + n, "",
                               fmt::format("the trace changed while it was read: it now ends before record {} "
                                           "of {} (a trace must not change during a run)",

@@ -233,6 +233,7 @@ TEST_F(ApitraceCapture, EveryDrawKindMatchesTheMeshCapture) {
 
   // The draw table keeps each draw's state; the additive draw is listed with its
   // mode and fragment count, its records are not in the trace.
+  for (const DrawInfo& d : f.header.draws) EXPECT_TRUE(d.state) << "draw " << d.id << " has no state";
   const DrawInfo* a = drawOf(f, 3);
   ASSERT_NE(a, nullptr);
   ASSERT_TRUE(a->state);
@@ -257,6 +258,33 @@ TEST_F(ApitraceCapture, EveryDrawKindMatchesTheMeshCapture) {
   const std::string summary = frameSummary(f, "out.oitt");
   EXPECT_NE(summary.find("fixed-function (no program): draw 4"), std::string::npos) << summary;
   EXPECT_NE(summary.find("1 additive"), std::string::npos) << summary;
+}
+
+// frameSummary reads every draw's state: a captured frame always has them
+// (readStream's addDraw sets each), so a draw without one is refused as a
+// programming error instead of dereferencing an empty optional. No GL needed.
+TEST(ApitraceSummary, ADrawWithoutStateIsRefused) {
+  FrameCapture f;
+  f.frame = 7;
+  f.header.version = 2;
+  f.header.width = f.header.height = 4;
+  DrawInfo with;
+  with.id = 0;
+  with.cls = DrawClass::Transparent;
+  with.state = DrawState{};
+  with.state->blend = BlendMode::Over;
+  with.state->fragments = 3;
+  f.header.draws.push_back(with);
+  EXPECT_NE(frameSummary(f, "out.oitt").find("1 over (3 fragments)"), std::string::npos) << frameSummary(f, "out.oitt");
+  DrawInfo without;
+  without.id = 1;
+  f.header.draws.push_back(without);
+  try {
+    frameSummary(f, "out.oitt");
+    FAIL() << "no exception";
+  } catch (const std::logic_error& e) {
+    EXPECT_STREQ(e.what(), "frameSummary: frame 7: draw 1 has no draw state");
+  }
 }
 
 // --verify: the transparent draws replayed with `alpha` equal GL's own blend of

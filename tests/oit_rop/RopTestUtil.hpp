@@ -86,6 +86,21 @@ inline RopConfig smallConfig() {
   return c;
 }
 
+// The scene the approximate engine is measured against the cycle engine on
+// (ApproximateTiming.CloseToTheCycleEngine, ApproximateLockConflicts): 192 x
+// 128, depth up to 24 over an opaque backdrop (smallScene, seed 3), under
+// mlab with k = 4 rows of rgba8t8z32.
+struct MlabAgreementScene {
+  static constexpr uint32_t W = 192, H = 128;
+  std::vector<Fragment> fs = smallScene(W, H, 24, 3);
+  model::AlgorithmParams p = [] {
+    model::AlgorithmParams q;
+    q.layers = 4;
+    q.format = model::StorageFormat::Rgba8T8Z32;
+    return q;
+  }();
+};
+
 // Every algorithm's name, for tests instantiated over all of them (paramName names each case).
 inline std::vector<std::string> allAlgorithmNames() {
   std::vector<std::string> v;

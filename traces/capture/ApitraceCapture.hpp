@@ -52,7 +52,7 @@ struct GlTransparentReference {
 
 struct FrameCapture {
   uint32_t frame = 0;
-  TraceHeader header;               // version 2: frame size, draw table with states
+  TraceHeader header;               // version 2: frame size, draw table; every draw has its state (addDraw)
   std::vector<Fragment> fragments;  // API order: draw, primitive, then (y, x)
   std::vector<UncapturedDraw> uncaptured;
   uint64_t draw_calls = 0;          // every draw call of the frame

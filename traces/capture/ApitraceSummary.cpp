@@ -1,6 +1,7 @@
 // frameSummary: what `oitsim capture --apitrace` prints per frame.
 #include <array>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,10 @@ std::string frameSummary(const FrameCapture& f, const std::string& output) {
   constexpr size_t kModes = static_cast<size_t>(oit::BlendMode::Other) + 1;
   std::array<uint64_t, kModes> draws_by_mode{}, fragments_by_mode{};
   for (const DrawInfo& d : f.header.draws) {
+    // A captured frame is format v2: readStream's addDraw gives every draw its
+    // state (FrameCapture::header); a draw without one is a caller's error.
+    if (!d.state)
+      throw std::logic_error(fmt::format("frameSummary: frame {}: draw {} has no draw state", f.frame, d.id));
     const auto m = static_cast<size_t>(d.state->blend);
     ++draws_by_mode[m];
     fragments_by_mode[m] += d.state->fragments;

@@ -10,24 +10,16 @@
 
 #include <fmt/format.h>
 
+#include "traces/capture/CaptureScene.hpp"
 #include "traces/capture/EglContext.hpp"
 #include "traces/capture/GlEntryPoints.hpp"
 #include "traces/capture/interposer/CaptureStream.hpp"
 
-#include "traces/gen/Backdrop.hpp"
-#include "traces/gen/Math.hpp"
-#include "traces/gen/Mesh.hpp"
-
 namespace oit::capture {
 
 using namespace gl;  // the entry points, loaded at run time (GlEntryPoints.hpp)
-using gen::Mat4;
-using gen::Vec3;
 
 namespace {
-
-// Shading modes of the fragment shader (u_shade).
-enum ShadeMode : int { kConstant = 0, kLambertTwoSided = 1, kLambertOneSided = 2, kChecker = 3 };
 
 // One record of the storage buffer (std430, 32 bytes): the same layout as the
 // apitrace interposer's records.
@@ -92,50 +84,10 @@ void main() {
 
 }  // namespace
 
-// Geometry of one frame: per trace draw, parts with their own shading, all in one
-// triangle soup of (clip, world, normal) vertices.
-struct Part {
-  uint64_t first_tri = 0, tris = 0;  // in the soup
-  int shade = kConstant;
-  std::array<float, 3> colour{}, dark{};
-  float alpha = 1;
-  Vec3 axis_u, axis_v;
-};
-struct DrawGeom {
-  uint32_t id = 0;
-  DrawClass cls = DrawClass::Transparent;
-  std::vector<Part> parts;
-  bool cull_back = false;  // as gen's CullMode::Back (the backdrop's wall and pillar)
-};
-struct Vertex {
-  float clip[4];
-  float world[3];
-  float normal[3];
-};
-
-struct Scene {
-  gen::Camera camera;
-  Mat4 vp;
-  Vec3 light;
-  std::vector<DrawGeom> draws;
-  std::vector<Vertex> soup;
-
-  // Appends triangle (a, b, c) with face normal n; returns nothing, counts by soup size.
-  void tri(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n) {
-    for (const Vec3* p : {&a, &b, &c}) {
-      const gen::Vec4 cp = vp.transformPoint(*p);
-      soup.push_back({{cp.x, cp.y, cp.z, cp.w}, {p->x, p->y, p->z}, {n.x, n.y, n.z}});
-    }
-  }
-  uint64_t triCount() const { return soup.size() / 3; }
-};
-
 struct Capturer::Impl {
   CaptureOptions opts;
-  std::vector<std::shared_ptr<gen::Mesh>> meshes;  // in world space (placed)
-  std::vector<std::string> names;
+  std::unique_ptr<CaptureScene> scene;  // the meshes, camera and draw table (CaptureScene.hpp)
   TraceHeader header;
-  double fit_radius = 0.82, spread = 0;
   std::unique_ptr<EglContext> egl;
   GLuint program = 0, vao = 0, vbo = 0, ssbo = 0, counter = 0, fbo = 0, colour_tex = 0, depth_rb = 0;
   uint64_t capacity = 0;
@@ -232,144 +184,6 @@ struct Capturer::Impl {
     checkGl("pipeline state");
   }
 
-  void loadMeshes() {
-    const size_t n = opts.meshes.size();
-    spread = 1.1 * static_cast<double>(n - 1);
-    fit_radius = 0.82 + spread;  // gen's mesh-scene fit, widened for a row of meshes
-    for (size_t i = 0; i < n; ++i) {
-      auto mesh = std::make_shared<gen::Mesh>(gen::loadMesh(gen::resolveMeshPath(opts.meshes[i])));
-      const gen::MeshBounds b = gen::meshBounds(*mesh);
-      if (!(b.radius > 0))
-        throw std::runtime_error(fmt::format("mesh '{}' is degenerate (all vertices coincide)", opts.meshes[i]));
-      // Exactly gen's placement (radius 1 at the origin) for one mesh, so the
-      // vertices are bitwise the same; a row along x for several.
-      const float scale = 1.0f / b.radius;
-      Vec3 offset = -b.centre * scale;
-      offset.x += static_cast<float>(2.2 * static_cast<double>(i) - spread);
-      // As gen's addMesh: coordinates near fp32's limit cannot be scaled into view.
-      auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
-      auto cannotFrame = [&] {
-        throw std::runtime_error(fmt::format(
-            "mesh '{}' cannot be framed: its bounding-sphere radius {} does not scale to a finite fp32 placement; "
-            "rescale its coordinates",
-            opts.meshes[i], b.radius));
-      };
-      if (!std::isfinite(b.radius) || !std::isfinite(scale) || !(scale > 0) || !finite(offset)) cannotFrame();
-      for (Vec3& v : mesh->positions) v = v * scale + offset;
-      for (const auto& tri : mesh->triangles)
-        for (uint32_t k : tri)
-          if (!finite(mesh->positions[k])) cannotFrame();
-      meshes.push_back(std::move(mesh));
-      names.push_back(gen::meshDisplayName(opts.meshes[i]));
-    }
-  }
-
-  // gen's setCamera for the mesh scene (azimuth 30, elevation 5, fov 40).
-  gen::Camera camera(double azimuth_offset) const {
-    const double aspect = static_cast<double>(opts.width) / opts.height;
-    const double fovy = opts.fov_deg.value_or(40.0);
-    const double half_y = gen::radians(fovy) / 2, half_x = std::atan(aspect * std::tan(half_y));
-    const double dist = opts.distance > 0 ? opts.distance : fit_radius / std::sin(std::min(half_x, half_y));
-    gen::Camera c = gen::Camera::orbit({0, 0, 0}, opts.azimuth_deg.value_or(30.0) + azimuth_offset,
-                                       opts.elevation_deg.value_or(5.0), dist, fovy, aspect);
-    c.near_plane = std::max(0.05 * dist, dist - 2.0 - spread);
-    c.far_plane = dist + 4.0 + gen::Backdrop::kWallBehind + spread;
-    return c;
-  }
-
-  void buildHeader() {
-    header.width = opts.width;
-    header.height = opts.height;
-    header.encoding = ColourEncoding::Fp32;
-    const gen::Camera c = camera(0);
-    header.camera = CameraPlanes{static_cast<float>(c.near_plane), static_cast<float>(c.far_plane)};
-    uint32_t id = 0;
-    if (opts.backdrop) {
-      header.draws.push_back({id++, DrawClass::Opaque, "backdrop"});
-      header.draws.push_back({id++, DrawClass::Opaque, "pillar"});
-    }
-    for (const std::string& name : names) header.draws.push_back({id++, DrawClass::Transparent, name});
-  }
-
-  // The shared backdrop (traces/gen/Backdrop.hpp): checkered wall and floor, then a pillar.
-  void addBackdrop(Scene& s) const {
-    using gen::Backdrop;
-    static_assert(Backdrop::kCell == 0.25f, "the fragment shader's checker uses 0.25");
-    const Backdrop bd = gen::makeBackdrop(s.camera.eye, s.camera.target);
-
-    DrawGeom wall{0, DrawClass::Opaque, {}};
-    auto mix = [](const Vec3& a, const Vec3& b, float t) { return a * (1.0f - t) + b * t; };
-    for (const Backdrop::Checker& sf : bd.surfaces) {
-      Part part;
-      part.first_tri = s.triCount();
-      part.shade = kChecker;
-      part.colour = sf.light;
-      part.dark = sf.dark;
-      part.axis_u = sf.u_axis;
-      part.axis_v = sf.v_axis;
-      auto at = [&](int i, int j) {
-        const float u = static_cast<float>(i) / Backdrop::kGrid, v = static_cast<float>(j) / Backdrop::kGrid;
-        return mix(mix(sf.p00, sf.p10, u), mix(sf.p01, sf.p11, u), v);
-      };
-      for (int j = 0; j < Backdrop::kGrid; ++j)
-        for (int i = 0; i < Backdrop::kGrid; ++i) {
-          s.tri(at(i, j), at(i + 1, j), at(i + 1, j + 1), {});
-          s.tri(at(i, j), at(i + 1, j + 1), at(i, j + 1), {});
-        }
-      part.tris = s.triCount() - part.first_tri;
-      wall.parts.push_back(part);
-    }
-    wall.cull_back = true;  // gen draws the backdrop with CullMode::Back
-    s.draws.push_back(std::move(wall));
-
-    DrawGeom pillar{1, DrawClass::Opaque, {}};
-    Part part;
-    part.first_tri = s.triCount();
-    part.shade = kLambertOneSided;
-    part.colour = Backdrop::kPillarColour;
-    const Vec3* corner = bd.pillar;
-    for (const auto& q : Backdrop::kPillarFaces) {
-      const Vec3 n = gen::normalize(gen::cross(corner[q[1]] - corner[q[0]], corner[q[3]] - corner[q[0]]));
-      s.tri(corner[q[0]], corner[q[1]], corner[q[2]], n);
-      s.tri(corner[q[0]], corner[q[2]], corner[q[3]], n);
-    }
-    part.tris = s.triCount() - part.first_tri;
-    pillar.parts.push_back(part);
-    pillar.cull_back = true;  // its back faces would add hidden fragments gen does not make
-    s.draws.push_back(std::move(pillar));
-  }
-
-  Scene buildScene(double azimuth_offset) const {
-    Scene s;
-    s.camera = camera(azimuth_offset);
-    s.vp = s.camera.viewProjection();
-    s.light = gen::normalize(-s.camera.forward() + s.camera.trueUp() * 0.8f - s.camera.right() * 0.6f);
-    uint64_t total = opts.backdrop ? 2 * 2 * 64 + 12 : 0;
-    for (const auto& m : meshes) total += m->triangles.size();
-    s.soup.reserve(total * 3);
-    if (opts.backdrop) addBackdrop(s);
-    const uint32_t first_id = opts.backdrop ? 2 : 0;
-    for (size_t i = 0; i < meshes.size(); ++i) {
-      const gen::Mesh& m = *meshes[i];
-      DrawGeom d{first_id + static_cast<uint32_t>(i), DrawClass::Transparent, {}};
-      Part part;
-      part.first_tri = s.triCount();
-      part.shade = opts.shading == gen::Shading::Lambert ? kLambertTwoSided : kConstant;
-      // gen's mesh-scene defaults.
-      part.colour = opts.colours.empty() ? std::array<float, 3>{0.95f, 0.62f, 0.35f}
-                                         : opts.colours[std::min(i, opts.colours.size() - 1)];
-      part.alpha = opts.alphas.empty() ? 0.35f : opts.alphas[std::min(i, opts.alphas.size() - 1)];
-      for (const auto& t : m.triangles) {
-        const Vec3 &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
-        s.tri(a, b, c, gen::normalize(gen::cross(b - a, c - a)));
-      }
-      part.tris = s.triCount() - part.first_tri;
-      d.parts.push_back(part);
-      s.draws.push_back(std::move(d));
-    }
-    return s;
-  }
-
   void upload(const Scene& s) {
     // Orphan and refill: one buffer for the whole frame's soup.
     glNamedBufferData(vbo, static_cast<GLsizeiptr>(s.soup.size() * sizeof(Vertex)), s.soup.data(),
@@ -422,8 +236,8 @@ Capturer::Capturer(CaptureOptions opts) : impl_(std::make_unique<Impl>()) {
     bad(fmt::format("field of view {} is outside (1, 170) degrees", *opts.fov_deg));
   if (opts.meshes.size() > 1000) bad("at most 1000 meshes");
   m.opts = std::move(opts);
-  m.loadMeshes();
-  m.buildHeader();
+  m.scene = std::make_unique<CaptureScene>(m.opts);
+  m.header = m.scene->header();
   m.initGl();
 }
 
@@ -447,7 +261,7 @@ uint64_t Capturer::recordsPerDraw() const { return impl_->capacity; }
 CaptureStats Capturer::capture(FragmentSink& sink, double azimuth_offset_deg) {
   Impl& m = *impl_;
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene s = m.buildScene(azimuth_offset_deg);
+  const Scene s = m.scene->build(azimuth_offset_deg);
   m.upload(s);
   CaptureStats st;
   st.capacity = m.capacity;
@@ -523,7 +337,7 @@ CaptureStats Capturer::capture(FragmentSink& sink, double azimuth_offset_deg) {
 }
 
 std::vector<std::array<float, 4>> Capturer::clipVertices(uint32_t draw, double azimuth_offset_deg) const {
-  const Scene s = impl_->buildScene(azimuth_offset_deg);
+  const Scene s = impl_->scene->build(azimuth_offset_deg);
   std::vector<std::array<float, 4>> out;
   for (const DrawGeom& d : s.draws) {
     if (d.id != draw) continue;
@@ -536,7 +350,7 @@ std::vector<std::array<float, 4>> Capturer::clipVertices(uint32_t draw, double a
 
 GlReference Capturer::reference(double azimuth_offset_deg) {
   Impl& m = *impl_;
-  const Scene s = m.buildScene(azimuth_offset_deg);
+  const Scene s = m.scene->build(azimuth_offset_deg);
   m.upload(s);
   GlReference ref;
   ref.width = m.opts.width;

@@ -30,18 +30,14 @@ namespace {
 // Measured: 221 against 220.
 // (On the DRAM-bound 32 KiB cache: 2,863 against 5,948.)
 TEST(ApproximateLockConflicts, SameAsTheCycleEngineWhenNothingWaitsAtThePort) {
-  constexpr uint32_t W = 192, H = 128;
-  const auto fs = smallScene(W, H, 24, 3);
-  model::AlgorithmParams p;
-  p.layers = 4;
-  p.format = model::StorageFormat::Rgba8T8Z32;
+  const MlabAgreementScene s;
   RopConfig c = smallConfig();
   c.cache.size_bytes = 16 << 20;
   c.input.latency_model = LatencyModel::Fixed;
   RopConfig a = c;
   a.sim.engine = SimEngine::Approximate;
-  const auto rc = runInChild([&] { return timed("mlab", p, fs, W, H, c); });
-  const auto ra = runInChild([&] { return timed("mlab", p, fs, W, H, a); });
+  const auto rc = runInChild([&] { return timed("mlab", s.p, s.fs, s.W, s.H, c); });
+  const auto ra = runInChild([&] { return timed("mlab", s.p, s.fs, s.W, s.H, a); });
   ASSERT_TRUE(rc.ok && ra.ok) << rc.error << ra.error;
   EXPECT_EQ(rc.stats["memory"]["dram_read_bytes"]["blend_arrays"].get<uint64_t>(), 0u);
   const double cc = double(rc.stats["lock"]["conflicts"].get<uint64_t>());

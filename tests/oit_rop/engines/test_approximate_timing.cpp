@@ -251,15 +251,11 @@ double rel(const nlohmann::json& a, const nlohmann::json& b) {
 
 // The measured agreement with the cycle engine (DESIGN.md's tolerance table).
 TEST(ApproximateTiming, CloseToTheCycleEngine) {
-  constexpr uint32_t W = 192, H = 128;
-  const auto fs = smallScene(W, H, 24, 3);
-  model::AlgorithmParams p;
-  p.layers = 4;
-  p.format = model::StorageFormat::Rgba8T8Z32;
+  const MlabAgreementScene s;
   RopConfig cyc = smallConfig();
   cyc.cache.size_bytes = 32 * 1024;  // misses and DRAM traffic matter
-  const auto c = runInChild([&] { return timed("mlab", p, fs, W, H, cyc); });
-  const auto a = runInChild([&] { return timed("mlab", p, fs, W, H, approximate(cyc)); });
+  const auto c = runInChild([&] { return timed("mlab", s.p, s.fs, s.W, s.H, cyc); });
+  const auto a = runInChild([&] { return timed("mlab", s.p, s.fs, s.W, s.H, approximate(cyc)); });
   ASSERT_TRUE(c.ok && a.ok) << c.error << a.error;
   EXPECT_TRUE(sameBits(a.image, c.image));
   const auto &cs = c.stats, &as = a.stats;
