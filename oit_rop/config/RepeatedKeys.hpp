@@ -46,7 +46,15 @@ typename Json::parser_callback_t refuseRepeatedKeys(std::function<void(const std
           if (style == KeyPath::Slashed) {
             if (s[i].object) at += s[i].key + "/";
           } else {
-            at += s[i].object ? (at.empty() ? "" : ".") + s[i].key : "[" + std::to_string(s[i].index - 1) + "]";
+            // Appended piece by piece: GCC 12's -Wrestrict misfires on "lit" + string.
+            if (!s[i].object) {
+              at += '[';
+              at += std::to_string(s[i].index - 1);
+              at += ']';
+            } else {
+              if (!at.empty()) at += '.';
+              at += s[i].key;
+            }
           }
         }
         on_repeat(style == KeyPath::Slashed || at.empty() ? at + key : at + "." + key);
