@@ -113,6 +113,15 @@ std::vector<Request> overBanks(unsigned n, unsigned used, unsigned banks, unsign
   return rs;
 }
 
+// The round configuration on one channel, closed page, with these limits.
+DramConfig closedPage(unsigned trrd, unsigned tfaw) {
+  DramConfig c = roundDramConfig(1);
+  c.open_row = false;
+  c.trrd = trrd;
+  c.tfaw = tfaw;
+  return c;
+}
+
 // A closed-page stream over all 8 banks: every read activates its bank. Without
 // limits a bank's chain (tRCD + CL + burst + tRP = 37) over 8 banks allows an
 // activate every 4.625 cycles, the bus a burst every 4: 800 reads end at
@@ -125,10 +134,7 @@ std::vector<Request> overBanks(unsigned n, unsigned used, unsigned banks, unsign
 // 40 + 40 x 199 + 12 + 26 = 8,038 cycles: 4 reads per 40 cycles, the bus
 // 40 % busy.
 TEST(DramActivateLimits, ClosedPageOverAllBanksIsFourActivatesPerTfaw) {
-  DramConfig c = roundDramConfig(1);
-  c.open_row = false;
-  c.trrd = 4;
-  c.tfaw = 40;
+  DramConfig c = closedPage(4, 40);
   MemorySystem m(c, kRoundMhz);
   EXPECT_EQ(streamEnd(m, overBanks(800, 8, c.banks, c.row_bytes)), kCtrl + 40 * 199 + 3 * 4 + kTrcd + kCl + kBurst);
   EXPECT_EQ(m.stats().row_misses, 800u);
@@ -149,9 +155,7 @@ TEST(DramActivateLimits, ClosedPageOverAllBanksIsFourActivatesPerTfaw) {
 // previous data's end... its activates 11 + 26 = 37 apart), again under 2 x 20:
 // tRRD bounds it too, activate k at ctrl + 20 k, the first without tRP.
 TEST(DramActivateLimits, TwoBankAlternationIsOneActivatePerTrrd) {
-  DramConfig c = roundDramConfig(1);
-  c.open_row = false;
-  c.trrd = 20;
+  DramConfig c = closedPage(20, 0);
   MemorySystem closed(c, kRoundMhz);
   EXPECT_EQ(streamEnd(closed, overBanks(500, 2, c.banks, c.row_bytes)), kCtrl + 20 * 499 + kTrcd + kCl + kBurst);
   c.open_row = true;
@@ -225,10 +229,7 @@ TEST(DramActivateLimits, PresetsClosedPageIsBoundByTheActivateWindow) {
 // idle controller's 140 + 22 = 162: 300 cycles of queueing, all of them its
 // bank's (the bus idles meanwhile).
 TEST(DramActivateLimits, TheWaitIsTheBanks) {
-  DramConfig c = roundDramConfig(1);
-  c.open_row = false;
-  c.trrd = 4;
-  c.tfaw = 400;
+  const DramConfig c = closedPage(4, 400);
   MemorySystem m(c, kRoundMhz);
   for (unsigned i = 0; i < 4; ++i) m.access(0, uint64_t(i) * c.row_bytes, 64, false, Surface::BlendArrays);
   m.resetProbe();
