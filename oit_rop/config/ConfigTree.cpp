@@ -404,6 +404,7 @@ void ConfigTree::validate() const {
     const std::string problem = DramTimings::refreshProblem(c.dram, c.clock.core_mhz);
     if (!problem.empty()) errs.push_back(problem);
   }
+  if (const std::string problem = DramTimings::activateProblem(c.dram); !problem.empty()) errs.push_back(problem);
   if (c.alu.fp32_rate > c.alu.fp16_rate)
     errs.push_back(fmt::format("alu.fp32_rate ({}) > alu.fp16_rate ({}): wider rows cannot blend faster",
                                c.alu.fp32_rate, c.alu.fp16_rate));

@@ -18,6 +18,10 @@ namespace {
 RopConfig irisPro5200() {
   RopConfig c;  // the struct's defaults hold this part's partition, input, lock, ALU and DRAM values
   c.preset = "iris-pro-5200";
+  // DDR3-1600 x8 devices (1 KB page: 8 of them make the channel's 8 KiB row):
+  // tRRD max(4 nCK, 6 ns) = 5 tCK, tFAW 30 ns = 24 tCK (JESD79-3 speed bins).
+  c.dram.trrd = 5;
+  c.dram.tfaw = 24;
   c.cache.line_bytes = 64;
   // LLC: 6 MB in 4 ring-stop slices (one per core), 12 ways; the GPU reaches it
   // through its GTI port (64 B/clk read in the Gen8/9 whitepapers): 16 B/clk per slice.
@@ -70,6 +74,8 @@ RopConfig titanXMaxwell() {
   c.dram.tras = 56;
   c.dram.twtr = 8;  // tWTR 5 ns (Ramulator's GDDR5 speed table) at tCK 0.667 ns
   c.dram.trtw = 2;  // RD->WR = CL + BL/4 + 2 - WL: 2 tCK of idle data bus
+  c.dram.trrd = 9;   // 5.7 ns and 23.4 ns (Ramulator's GDDR5-7000 speed table) at tCK 0.667 ns
+  c.dram.tfaw = 36;
   c.dram.trefi_ns = 1900.0;  // 32 ms / 16,384 refresh commands (4 Gb GDDR5, as on the GTX 980)
   c.dram.trfc_ns = 110.0;    // no GDDR5 datasheet at hand: an 8 Gb GDDR6's 110 ns (CONFIG.md)
   c.dram.banks = 16;
@@ -119,6 +125,9 @@ RopConfig navi21() {
   // commands; tRFCab 110 ns.
   c.dram.twtr = 10;
   c.dram.trtw = 2;
+  // tRRD 4 ns, tFAW 16 ns (Ramulator 2's GDDR6-16000 1.35 V table; no datasheet read).
+  c.dram.trrd = 8;
+  c.dram.tfaw = 32;
   c.dram.trefi_ns = 1900.0;
   c.dram.trfc_ns = 110.0;
   c.dram.banks = 16;
@@ -158,13 +167,13 @@ const std::vector<PresetEntry>& presets() {
        {OITSIM_COMMON_ESTIMATES, "input.fragments_per_clock", "lock.capacity", "cache.size_bytes", "cache.line_bytes",
         "cache.sector_bytes", "l2.ways", "l2.line_bytes", "l2.sector_bytes", "l2.hit_latency", "l2.bytes_per_clock",
         "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.twtr", "dram.trtw", "dram.trefi_ns",
-        "dram.trfc_ns"}},
+        "dram.trfc_ns", "dram.trrd", "dram.tfaw"}},
       {"navi21", navi21,
        {OITSIM_COMMON_ESTIMATES, "partitions.count", "input.fragments_per_clock", "lock.capacity", "cache.size_bytes",
         "cache.line_bytes", "alu.blends_per_clock", "l2.size_bytes", "l2.ways", "l2.line_bytes", "l2.slices", "l2.hit_latency",
         "l2.bytes_per_clock", "l3.ways", "l3.line_bytes", "l3.slices", "l3.hit_latency", "l3.bytes_per_clock",
         "l3.victim_only", "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.banks", "dram.twtr",
-        "dram.trtw", "dram.trfc_ns"}},
+        "dram.trtw", "dram.trfc_ns", "dram.trrd", "dram.tfaw"}},
   };
   return list;
 }

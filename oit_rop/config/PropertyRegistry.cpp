@@ -236,6 +236,12 @@ const std::vector<Property>& registry() {
       integer("dram.trp", &R::dram, &DramConfig::trp, 1, 255, "tCK", "precharge time"),
       integer("dram.tras", &R::dram, &DramConfig::tras, 0, 255, "tCK",
               "activate to precharge: a row stays open at least this long (0 = no limit)"),
+      integer("dram.trrd", &R::dram, &DramConfig::trrd, 0, 255, "tCK",
+              "activate to activate on one channel (different banks; one rank per channel): a row miss or "
+              "closed-page run waits for it (0 = no limit)"),
+      integer("dram.tfaw", &R::dram, &DramConfig::tfaw, 0, 255, "tCK",
+              "four-activate window: at most four activates per channel in any tFAW (0 = none; else at least "
+              "4 x dram.trrd)"),
       integer("dram.twtr", &R::dram, &DramConfig::twtr, 0, 255, "tCK",
               "write-to-read turnaround: end of write data to the next read command on the channel; the read's "
               "data follows CL later, so the bus idles tWTR + CL at each switch from writes to reads"),

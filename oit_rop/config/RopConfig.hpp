@@ -127,6 +127,10 @@ struct DramConfig {
   double tck_ns = 1.25;             // DRAM clock period
   unsigned cl = 11, trcd = 11, trp = 11;  // in DRAM clocks
   unsigned tras = 28;                     // activate to precharge, DRAM clocks (0: no limit)
+  // Activate-rate limits per channel (one rank), DRAM clocks, 0 = no limit. The
+  // struct leaves them off (the presets set them: DDR3-1600 x8 has 5 and 24).
+  unsigned trrd = 0;                      // activate to activate, different banks
+  unsigned tfaw = 0;                      // at most four activates in any window this long
   unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
   unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
   unsigned banks = 8;

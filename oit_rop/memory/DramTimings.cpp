@@ -35,6 +35,12 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
   tras = tck(cfg.tras);
   twtr = tck(cfg.twtr);
   trtw = tck(cfg.trtw);
+  {
+    const std::string problem = activateProblem(cfg);
+    requireDramConfig(problem.empty(), problem.c_str());
+  }
+  trrd = tck(cfg.trrd);
+  tfaw = tck(cfg.tfaw);
   const double burst_cycles = cfg.burst_bytes / bytes_per_cycle;
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
   requireDramConfig(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
@@ -48,6 +54,14 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
     for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);
     max_run_bursts = (refresh_period - refresh_rfc - trcd - cl) / burst;  // >= 1: refreshProblem
   }
+}
+
+std::string DramTimings::activateProblem(const DramConfig& cfg) {
+  if (cfg.tfaw == 0 || cfg.tfaw >= 4 * uint64_t(cfg.trrd)) return {};
+  return fmt::format(
+      "dram.tfaw ({} tCK) is below 4 x dram.trrd ({} tCK): four activates tRRD apart already span {} tCK, so the "
+      "window could never bind (JEDEC parts have tFAW >= 4 tRRD); set dram.tfaw to 0 (no window) or at least {}",
+      cfg.tfaw, cfg.trrd, 4 * uint64_t(cfg.trrd), 4 * uint64_t(cfg.trrd));
 }
 
 std::string DramTimings::refreshProblem(const DramConfig& cfg, double core_mhz) {

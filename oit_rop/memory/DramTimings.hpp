@@ -36,6 +36,7 @@ struct DramTimings {
   double bytes_per_cycle = 0;  // one channel's data bus
   uint64_t ctrl = 0, cl = 0, trcd = 0, trp = 0, tras = 0, burst = 0;
   uint64_t twtr = 0, trtw = 0;  // write-to-read (to the read command), read-to-write (idle bus)
+  uint64_t trrd = 0, tfaw = 0;  // activate to activate (other bank), four-activate window; 0 = none
 
   // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
   // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /
@@ -63,6 +64,10 @@ struct DramTimings {
   // "" when dram.trefi_ns / trfc_ns are usable at core_mhz, else what is wrong
   // (the time between two refreshes must hold an activate, CL and one burst).
   static std::string refreshProblem(const DramConfig& cfg, double core_mhz);
+  // "" when dram.trrd / tfaw are consistent, else what is wrong: a tFAW below
+  // 4 x tRRD could never bind (four activates tRRD apart already span it), as
+  // in no JEDEC part; it is refused as a likely mistake (0 turns it off).
+  static std::string activateProblem(const DramConfig& cfg);
 };
 
 }  // namespace oit::rop

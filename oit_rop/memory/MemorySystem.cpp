@@ -44,7 +44,7 @@ MemorySystem::MemorySystem(const DramConfig& cfg, double core_mhz)
   requireDramConfig(cfg.write_queue >= 1 && cfg.write_high >= 1 && cfg.write_high <= cfg.write_queue &&
               cfg.write_low < cfg.write_high,
           "write watermarks must satisfy write_low < write_high <= write_queue");
-  channels_.assign(cfg.channels, Channel(cfg));
+  channels_.assign(cfg.channels, Channel(cfg, t_));
   window_ = cfg.scheduler == DramScheduler::FrFcfs ? cfg.queue_depth : 0;
   banks_.assign(size_t(cfg.channels) * cfg.banks, Bank{});
   stats_.channel_busy.assign(cfg.channels, 0);
@@ -58,6 +58,8 @@ double MemorySystem::clCycles() const { return DramTimings::cycles(t_.cl); }
 double MemorySystem::trcdCycles() const { return DramTimings::cycles(t_.trcd); }
 double MemorySystem::trpCycles() const { return DramTimings::cycles(t_.trp); }
 double MemorySystem::trasCycles() const { return DramTimings::cycles(t_.tras); }
+double MemorySystem::trrdCycles() const { return DramTimings::cycles(t_.trrd); }
+double MemorySystem::tfawCycles() const { return DramTimings::cycles(t_.tfaw); }
 double MemorySystem::burstCycles() const { return DramTimings::cycles(t_.burst); }
 double MemorySystem::twtrCycles() const { return DramTimings::cycles(t_.twtr); }
 double MemorySystem::trtwCycles() const { return DramTimings::cycles(t_.trtw); }
@@ -359,7 +361,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   Bank copy;
   Bank& b = refresh_period ? copy : bank;
   uint64_t column;   // tick the run's first column command (read or write) issues
-  uint64_t act = 0;  // closed page: the run's activate
+  uint64_t act = 0;  // the run's activate (closed page: always; open row: on a row miss)
   uint64_t xfer, run_hits;
   const uint64_t len = n * burst;
   bool refreshed = false;  // a refresh closed the bank's row
@@ -396,6 +398,10 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
           first_cmd = std::max(start, b.act + tras);
           start = first_cmd + trp;
         }
+        // The channel's activate limits (tRRD, tFAW) may hold the activate
+        // back: the bank waits (its column command is later).
+        start = c.activates.earliest(start);
+        act = start;
         b.open_row = row;
         b.act = start;
         b.row_ready = start + trcd;
@@ -403,7 +409,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
       }
     } else {
       run_hits = n - 1;
-      act = std::max(earliest, b.act_ready);
+      act = c.activates.earliest(std::max(earliest, b.act_ready));
       column = act + trcd;
       first_cmd = act;
     }
@@ -449,6 +455,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   run_queue_ = queueParts(c, place, xfer, in_gap);
   hits_ += run_hits;
   misses_ += n - run_hits;
+  if (run_hits < n) c.activates.record(act);  // the run opened its row
   const uint64_t end = xfer + len;
   if (in_gap) {
     c.gaps.take(gap, xfer, len, burst);

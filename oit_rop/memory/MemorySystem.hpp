@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "oit_rop/config/RopConfig.hpp"
+#include "oit_rop/memory/DramActivateWindow.hpp"
 #include "oit_rop/memory/DramAddressMap.hpp"
 #include "oit_rop/memory/DramBusGaps.hpp"
 #include "oit_rop/memory/DramTimings.hpp"
@@ -95,6 +96,8 @@ class MemorySystem {
   double trcdCycles() const;
   double trpCycles() const;
   double trasCycles() const;
+  double trrdCycles() const;   // activate to activate, different banks (0: no limit)
+  double tfawCycles() const;   // four-activate window (0: none)
   double burstCycles() const;  // data-bus time of one burst
   double twtrCycles() const;   // end of write data to a read command
   double trtwCycles() const;   // idle bus between read data and write data
@@ -124,7 +127,8 @@ class MemorySystem {
   };
 
   // One channel: its data bus, its turnaround state, the idle stretches a
-  // later read may take (DramBusGaps) and its write queue.
+  // later read may take (DramBusGaps), its write queue and its activates
+  // (tRRD, tFAW: the model has one rank per channel).
   struct Channel {
     uint64_t bus_free = 0;  // ticks: end of the latest data on the bus
     uint64_t busy = 0;      // ticks of data moved
@@ -137,7 +141,9 @@ class MemorySystem {
     // Ticks the bus idled per 2^kBusyBlockShift cycles because the run after
     // it waited for its bank, a turnaround, a refresh (queueParts).
     std::array<std::vector<uint64_t>, 3> idle_blocks;
-    explicit Channel(const DramConfig& c) : writes(c.write_queue, c.write_high, c.write_low) {}
+    DramActivateWindow activates;
+    Channel(const DramConfig& c, const DramTimings& t)
+        : writes(c.write_queue, c.write_high, c.write_low), activates(t.trrd, t.tfaw) {}
   };
 
   // access() after its checks and byte counts; Pow2 = map_.pow2.

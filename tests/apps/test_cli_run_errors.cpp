@@ -390,5 +390,24 @@ TEST_F(CliRunErrors, BadHierarchyIsOneLineNamingTheParameter) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// The activate limits: a tFAW below 4 x tRRD (a window that could never
+// bind) is one line naming both, exit 1, nothing written; from a config file
+// as from --set.
+TEST_F(CliRunErrors, ActivateWindowBelowFourTrrdIsRefused) {
+  const std::string out = dir_->file("badfaw");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --set dram.tfaw=19");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): dram.tfaw (19 tCK) is below 4 x "
+                      "dram.trrd (5 tCK): four activates tRRD apart already span 20 tCK, so the window could never "
+                      "bind (JEDEC parts have tFAW >= 4 tRRD); set dram.tfaw to 0 (no window) or at least 20\n");
+  EXPECT_FALSE(fs::exists(out));
+  const std::string cfg = dir_->file("faw.json");
+  writeText(cfg, R"({"dram": {"trrd": 10, "tfaw": 30}})");
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --config " + cfg + " --preset titan-x-maxwell");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("dram.tfaw (30 tCK) is below 4 x dram.trrd (10 tCK)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
 }  // namespace oit::test

@@ -41,6 +41,34 @@ TEST(ConfigTree, DramRefreshIsOnAndValidated) {
   EXPECT_NO_THROW(t.validate());
 }
 
+// The activate limits (MEMORY.md, "Activate limits"): each preset carries its
+// memory's tRRD and tFAW (DDR3-1600 x8: 5 and 24 tCK; GDDR5: 9 and 36;
+// GDDR6: 8 and 32), and a tFAW below 4 x tRRD, a window that could never bind,
+// is refused by validate() in one line naming both; 0 turns either off.
+TEST(ConfigTree, DramActivateLimitsArePresetAndValidated) {
+  EXPECT_EQ(ConfigTree::forPreset("iris-pro-5200").config().dram.trrd, 5u);
+  EXPECT_EQ(ConfigTree::forPreset("iris-pro-5200").config().dram.tfaw, 24u);
+  EXPECT_EQ(ConfigTree::forPreset("titan-x-maxwell").config().dram.trrd, 9u);
+  EXPECT_EQ(ConfigTree::forPreset("titan-x-maxwell").config().dram.tfaw, 36u);
+  EXPECT_EQ(ConfigTree::forPreset("navi21").config().dram.trrd, 8u);
+  EXPECT_EQ(ConfigTree::forPreset("navi21").config().dram.tfaw, 32u);
+  ConfigTree t = ConfigTree::forPreset("iris-pro-5200");
+  t.set("dram.tfaw", "19");
+  const std::string e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.tfaw (19 tCK) is below 4 x dram.trrd (5 tCK): four activates tRRD apart already span "
+                   "20 tCK, so the window could never bind (JEDEC parts have tFAW >= 4 tRRD); set dram.tfaw to 0 (no "
+                   "window) or at least 20"),
+            std::string::npos)
+      << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;  // one line
+  t.set("dram.tfaw", "20");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.tfaw", "0");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.trrd", "0");
+  EXPECT_NO_THROW(t.validate());
+}
+
 // The write queue's watermarks out of order are refused by validate(), one
 // line each naming the parameters and the rule; sizes of 0 and unknown
 // schedulers by their range.

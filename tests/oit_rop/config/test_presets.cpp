@@ -50,10 +50,14 @@ TEST(ConfigTree, IrisPro5200Preset) {
   EXPECT_EQ(c.dram.trp, 11u);
   EXPECT_DOUBLE_EQ(c.dram.tck_ns, 1.25);
   EXPECT_EQ(c.dram.banks, 8u);
-  // Apart from its caches it is the struct's base.
+  EXPECT_EQ(c.dram.trrd, 5u);   // DDR3-1600 x8: max(4 nCK, 6 ns)
+  EXPECT_EQ(c.dram.tfaw, 24u);  // 30 ns
+  // Apart from its caches and activate limits it is the struct's base.
   RopConfig base;
   base.l2 = c.l2;
   base.l3 = c.l3;
+  base.dram.trrd = c.dram.trrd;
+  base.dram.tfaw = c.dram.tfaw;
   EXPECT_EQ(c, base);
   EXPECT_NO_THROW(t.validate());
 }
