@@ -10,11 +10,16 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "oit_rop/config/RopConfig.hpp"
 #include "oit_rop/memory/PortCalendar.hpp"
@@ -168,7 +173,18 @@ class CacheLevel final : public MemoryPort {
   size_t find(size_t set, uint64_t line) const {
     const uint32_t* const t = tagsOf(set);
     const uint32_t want = uint32_t(line + 1);
-    for (unsigned w = 0; w < cfg_.ways; ++w)
+    unsigned w = 0;
+#if defined(__SSE2__)
+    // Four tags per compare (a set's tags start on a 64-byte boundary; a
+    // line is in one way at most, so the first match is the match).
+    const __m128i k = _mm_set1_epi32(int(want));
+    for (; w + 4 <= cfg_.ways; w += 4) {
+      const __m128i four = _mm_load_si128(reinterpret_cast<const __m128i*>(t + w));
+      const unsigned m = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, k))));
+      if (m) return set + w + unsigned(std::countr_zero(m));
+    }
+#endif
+    for (; w < cfg_.ways; ++w)
       if (t[w] == want) return set + w;
     return kNoWay;
   }
