@@ -141,6 +141,10 @@ void DelayShares::addWait(Cycle from, Cycle to, const WaitSplit& w) {
   if (to <= from) return;
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
   addUnloaded(from, l, l - from);
+  if (e == l) {  // no DRAM queueing or transfer in [from, to) (an l2 hit's wait): no split
+    delay_[size_t(w.rest)] += to - e;
+    return;
+  }
   const QueueSplit q = queueSplit(w, l, e);
   delay_[size_t(RootCause::DramRefresh)] += q.refresh;
   delay_[size_t(RootCause::DramBankConflict)] += q.bank;
@@ -158,6 +162,10 @@ void DelayShares::addLike(uint64_t n, Cycle from, Cycle to, const WaitSplit& w) 
   const Cycle l = std::clamp(w.latency_end, from, to), e = std::clamp(w.dram_end, l, to);
   const uint64_t span = to - from, lat_all = n * (l - from) / span;
   addUnloaded(from, l, lat_all);
+  if (e == l) {  // no DRAM queueing or transfer in [from, to) (an l2 hit's wait): no split
+    delay_[size_t(w.rest)] += n - lat_all;
+    return;
+  }
   const QueueSplit q = queueSplit(w, l, e);
   const uint64_t refresh = n * q.refresh / span, bank = n * q.bank / span, turn = n * q.turnaround / span;
   const uint64_t bw = n * q.bandwidth / span;
@@ -177,18 +185,30 @@ void DelayShares::addUnloaded(Cycle from, Cycle to, uint64_t n) {
 
 void DelayShares::chargeTo(RootCauseAccount& acc, uint64_t n, RootCause fallback) {
   if (n == 0) return;
-  const uint64_t sum = std::accumulate(delay_.begin(), delay_.end(), uint64_t(0)) + unloaded_;
+  constexpr unsigned kUnloaded = kRootCauseCount;
+  uint64_t sum = unloaded_;
+  unsigned causes = unloaded_ != 0, only = kUnloaded;  // how many have a delay; the one, when one
+  for (unsigned i = 0; i < kRootCauseCount; ++i)
+    if (delay_[i]) {
+      sum += delay_[i];
+      ++causes;
+      only = i;
+    }
   if (sum == 0) {
     acc.add(fallback, n);
     return;
   }
   // Whole shares first, the cycles left to the largest remainders (ties: the
   // first cause; the unloaded accesses, kept apart, last), so the shares add
-  // up to n exactly.
-  constexpr unsigned kUnloaded = kRootCauseCount;
+  // up to n exactly. One cause alone takes all n (its share n x d / d, no
+  // remainder): no division.
   std::array<uint64_t, kRootCauseCount + 1> rem{}, got{};
   uint64_t given = 0;
-  for (unsigned i = 0; i <= kRootCauseCount; ++i) {
+  if (causes == 1) {
+    got[only] = n;
+    given = n;
+  }
+  for (unsigned i = 0; i <= kRootCauseCount && causes > 1; ++i) {
     const uint64_t d = i == kUnloaded ? unloaded_ : delay_[i];
     if (d == 0) continue;  // no share, no remainder
     uint64_t whole, x64;

@@ -12,7 +12,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
-#include <functional>
 
 #include "oit_rop/Types.hpp"
 
@@ -88,7 +87,27 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest =
 // the part of a wait's unloaded access during which the buses moved other
 // data is charged to bandwidth (a shorter latency would not have shortened
 // the frame then; a faster bus would). Empty: all latency.
-using BusShareFn = std::function<double(Cycle, Cycle)>;
+// An object's busShare(from, to) (MemorySystem's), called through a plain
+// function pointer: the approximate engine asks it per span, and a
+// std::function there cost its own indirections (session 20). The object
+// must outlive the accounts that hold it. Empty: all latency.
+class BusShareFn {
+ public:
+  BusShareFn() = default;
+  template <class T>
+  static BusShareFn of(const T& obj) {
+    BusShareFn f;
+    f.obj_ = &obj;
+    f.call_ = [](const void* o, Cycle from, Cycle to) { return static_cast<const T*>(o)->busShare(from, to); };
+    return f;
+  }
+  explicit operator bool() const { return call_ != nullptr; }
+  double operator()(Cycle from, Cycle to) const { return call_(obj_, from, to); }
+
+ private:
+  const void* obj_ = nullptr;
+  double (*call_)(const void*, Cycle, Cycle) = nullptr;
+};
 
 // Splits `n` cycles of unloaded access over [from, to) into latency and bandwidth.
 void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth);
@@ -98,7 +117,7 @@ void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint6
 class RootCauseAccount {
  public:
   using Cycles = std::array<uint64_t, kRootCauseCount>;
-  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
+  void setBusShare(BusShareFn f) { bus_ = f; }
   void set(Cycle now, RootCause c) {
     if (!wait_ && c == cause_) return;
     account(now);
@@ -144,7 +163,7 @@ class RootCauseAccount {
 // split once the bookings over them are final (settle(), finish()).
 class DelayShares {
  public:
-  void setBusShare(BusShareFn f) { bus_ = std::move(f); }
+  void setBusShare(BusShareFn f) { bus_ = f; }
   void add(RootCause c, uint64_t cycles) { delay_[std::size_t(c)] += cycles; }
   void addWait(Cycle from, Cycle to, const WaitSplit& w);  // [from, to) split as the WaitSplit says
   // `n` cycles in the proportions of w's parts over [from, to) (a hit that

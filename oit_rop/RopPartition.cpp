@@ -50,7 +50,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   early_cull_ = cfg_.early_depth.enabled && cfg_.skip.early_depth;
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
   miss_rest_ = cfg_.l2.size_bytes || cfg_.l3.size_bytes ? RootCause::L2 : RootCause::RopCacheMiss;
-  root_.setBusShare([&memory](Cycle from, Cycle to) { return memory.busShare(from, to); });
+  root_.setBusShare(BusShareFn::of(memory));
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload

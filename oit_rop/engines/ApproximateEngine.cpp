@@ -39,7 +39,7 @@ void ApproximateEngine::run() {
   // delays the fragments met since the last such span (DelayShares).
   p.root_.account(p.now_);
   DelayShares shares;
-  shares.setBusShare([&p](Cycle from, Cycle to) { return p.memory_.busShare(from, to); });
+  shares.setBusShare(BusShareFn::of(p.memory_));
   // A wait's span is split once the issues have passed its block of bus
   // record and a quantum (other partitions book up to a quantum behind):
   // requests booked later put their data after their own issue.

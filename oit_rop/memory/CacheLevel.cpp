@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace oit::rop {
 
@@ -188,11 +189,14 @@ CacheLevel::CacheLevel(std::string name, const SharedCacheConfig& cfg, Cycle loo
   sets_pow2_ = (sets_ & (sets_ - 1)) == 0;
   const uint32_t sectors = cfg.line_bytes / sector_bytes_;
   all_sectors_ = sectors == 32 ? ~0u : (1u << sectors) - 1;
-  block_bytes_ = size_t(cfg.ways) * kWayBytes;
+  block_bytes_ = blockBytes(cfg.ways);
+  records_offset_ = recordsOffset(cfg.ways);
   way_shift_ = unsigned(std::bit_width(cfg.ways - 1u));
   way_mask_ = (size_t(1) << way_shift_) - 1;
-  store_.reset(static_cast<unsigned char*>(std::calloc(size_t(cfg.slices) * sets_, block_bytes_)));
+  // 64 bytes more than the blocks, to start them on a host cache line.
+  store_.reset(static_cast<unsigned char*>(std::calloc(size_t(cfg.slices) * sets_ * block_bytes_ + 64, 1)));
   if (!store_) throw std::bad_alloc();
+  blocks_ = store_.get() + ((64 - reinterpret_cast<uintptr_t>(store_.get()) % 64) % 64);
   set_used_.assign((size_t(cfg.slices) * sets_ + 63) / 64, 0);
   ports_.assign(cfg.slices, PortCalendar(cfg.bytes_per_clock, lookback));
   if (classify_misses) classes_ = std::make_unique<MissClassifier>(cfg.size_bytes / cfg.line_bytes);
@@ -204,7 +208,7 @@ uint64_t CacheLevel::hostBytesEstimate(const SharedCacheConfig& cfg, bool classi
   if (cfg.size_bytes == 0 || cfg.line_bytes == 0 || cfg.ways == 0) return 0;
   const uint64_t lines = cfg.size_bytes / cfg.line_bytes;
   const uint64_t sets = lines / cfg.ways;
-  const uint64_t tags = std::min(sets, lines_touched) * cfg.ways * kWayBytes + lines / 8;
+  const uint64_t tags = std::min(sets, lines_touched) * blockBytes(cfg.ways) + lines / 8;
   // The shadow per line it holds: its key, LRU links and sectors (20 B) and
   // two hash-table entries at half load (line -> slot, line -> sectors seen).
   constexpr uint64_t kShadowBytesPerLine = 96;
@@ -225,40 +229,66 @@ uint32_t CacheLevel::setOf(uint64_t addr) const { return setIndex(addr >> line_s
 }
 
 bool CacheLevel::resident(uint64_t addr) const {
+  if ((addr >> line_shift_) > kMaxLine) return false;  // no tag holds it
   unsigned slice;
   return find(setOfLine(addr >> line_shift_, slice), addr >> line_shift_) != kNoWay;
+}
+
+void CacheLevel::lineOutOfRange(uint64_t line) const {
+  throw std::runtime_error(fmt::format("{}: address {:#x} is past the {}-bit tags of its tag store (line numbers up "
+                                       "to {:#x} with {}-byte lines)",
+                                       name_, line * cfg_.line_bytes, 32, kMaxLine, cfg_.line_bytes));
+}
+
+void CacheLevel::renumberStamps() {
+  // Only sets ever allocated into hold stamps; in each, the valid ways'
+  // stamps (distinct: every touch takes a new one) become 1..n in their
+  // order, and the clock continues after the largest n.
+  uint32_t top = 0;
+  std::vector<std::pair<uint32_t, unsigned>> order;
+  for (size_t word = 0; word < set_used_.size(); ++word)
+    for (uint64_t bits = set_used_[word]; bits != 0; bits &= bits - 1) {
+      const size_t set = (word * 64 + size_t(std::countr_zero(bits))) << way_shift_;
+      order.clear();
+      for (unsigned w = 0; w < cfg_.ways; ++w)
+        if (tag(set + w) != 0) order.push_back({stamp(set + w), w});
+      std::sort(order.begin(), order.end());
+      for (uint32_t r = 0; r < order.size(); ++r) stamp(set + order[r].second) = r + 1;
+      top = std::max(top, uint32_t(order.size()));
+    }
+  stamp_ = top + 1;
 }
 
 void CacheLevel::evict(Cycle now, size_t way) {
   if (tag(way) == 0) return;
   Line& l = record(way);
-  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
-  const unsigned si = unsigned(l.surface);
+  const uint64_t addr = lineOf(way) * cfg_.line_bytes;
+  const Surface surf = surface(way);
+  const unsigned si = unsigned(surf);
   if (victim_sink_) {
     // A victim level below takes every eviction, clean or dirty.
     ++stats_.writebacks[si];
     stats_.writeback_bytes[si] += uint64_t(sectorCount(l.valid)) * sector_bytes_;
-    victim_sink_->insertVictim(now, addr, cfg_.line_bytes, sector_bytes_, l.valid, l.dirty, l.surface);
+    victim_sink_->insertVictim(now, addr, cfg_.line_bytes, sector_bytes_, l.valid, l.dirty, surf);
   } else if (l.dirty) {
     ++stats_.writebacks[si];
     forEachRun(l.dirty, [&](uint32_t s, uint32_t e) {  // a write per run of dirty sectors
       const uint32_t bytes = (e - s) * sector_bytes_;
       stats_.writeback_bytes[si] += bytes;
-      lower_.access(now, addr + uint64_t(s) * sector_bytes_, bytes, true, l.surface);
+      lower_.access(now, addr + uint64_t(s) * sector_bytes_, bytes, true, surf);
     });
   }
   l = Line{};
   tag(way) = 0;
   stamp(way) = 0;
+  surface(way) = Surface::BlendArrays;
 }
 
-size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
-  const size_t set_no = set >> way_shift_;
-  set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
+size_t CacheLevel::pickVictim(size_t set) const {
   // The first invalid way, else the least recently used (the first of equal
   // stamps); the set's tags and stamps found once, not per way.
-  const uint64_t* const tags = tagsOf(set);
-  const uint64_t* const stamps = tags + cfg_.ways;
+  const uint32_t* const tags = tagsOf(set);
+  const uint32_t* const stamps = tags + cfg_.ways;
   unsigned v = 0;
   for (unsigned w = 0; w < cfg_.ways; ++w) {
     if (tags[w] == 0) {
@@ -267,10 +297,15 @@ size_t CacheLevel::allocate(Cycle now, size_t set, uint64_t line) {
     }
     if (stamps[w] < stamps[v]) v = w;
   }
-  const size_t victim = set + v;
-  evict(now, victim);
-  tag(victim) = line + 1;
-  return victim;
+  return set + v;
+}
+
+size_t CacheLevel::install(Cycle now, size_t set, size_t way, uint64_t line) {
+  const size_t set_no = set >> way_shift_;
+  set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
+  evict(now, way);
+  tag(way) = uint32_t(line + 1);
+  return way;
 }
 
 void CacheLevel::partSectorsOf(uint64_t line_addr, uint64_t addr, uint32_t bytes, uint32_t& any, uint32_t& whole) const {
@@ -310,6 +345,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
   (write ? stats_.write_bytes : stats_.read_bytes)[si] += bytes;
   Cycle done = now;
   const uint64_t first = addr >> line_shift_, last = (addr + bytes - 1) >> line_shift_;
+  checkLine(last);
   for (uint64_t line = first; line <= last; ++line) {
     const uint64_t line_addr = line * cfg_.line_bytes;
     const uint64_t b = std::max(addr, line_addr), e = std::min(addr + bytes, line_addr + cfg_.line_bytes);
@@ -333,15 +369,23 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
         continue;
       }
       ++stats_.misses[si];
+      // The way the line will take is chosen before the fill (the fill does
+      // not touch this level), so the victim level's set for its old line
+      // is on its way into the host's caches while the fill looks up its own.
+      size_t victim = kNoWay;
+      if (!l && !cfg_.victim_only) {
+        victim = pickVictim(set);
+        if (victim_sink_ && tag(victim) != 0) victim_sink_->prefetchSet(lineOf(victim));
+      }
       // The miss goes below once the lookup is done; a victim level does not
       // allocate what it did not have.
       const Cycle got = fetch(start + cfg_.hit_latency, line, missing, s);
       done = std::max({done, after_lookup, moved, got});
       if (!l && cfg_.victim_only) continue;
       if (!l) {
-        way = allocate(start, set, line);
+        way = install(start, set, victim, line);
         l = &record(way);
-        l->surface = s;
+        surface(way) = s;
       }
       l->valid |= missing;
       l->ready = std::max(l->ready, got);
@@ -370,7 +414,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
     l->valid |= any;
     l->dirty |= any;
-    l->surface = s;
+    surface(way) = s;
     touchLru(way);
   }
   return done;
@@ -396,6 +440,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     const uint64_t a = addr + uint64_t(k) * sector_bytes;
     const bool is_dirty = (dirty >> k & 1) != 0;
     const uint64_t line = a >> line_shift_, line_addr = line << line_shift_;
+    checkLine(line);
     uint32_t any, whole;
     sectorsOf(line_addr, a, sector_bytes, any, whole);
     unsigned slice;
@@ -414,7 +459,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
         continue;
       }
       way = allocate(start, set, line);
-      record(way).surface = s;
+      surface(way) = s;
     }
     Line* const l = &record(way);
     if (classes_) {
@@ -426,7 +471,7 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     l->valid |= whole;
     if (is_dirty) {
       l->dirty |= whole;
-      l->surface = s;
+      surface(way) = s;
       if (any & ~whole) {  // the rest of a partly covered sector: written through
         lower_.access(start, a, sector_bytes, true, s);
         stats_.writeback_bytes[si] += sector_bytes;
@@ -448,9 +493,10 @@ void CacheLevel::dirtyRanges(std::vector<DirtyRange>& out) const {
 void CacheLevel::dirtyRuns(size_t way, std::vector<DirtyRange>& out) const {
   if (tag(way) == 0) return;
   const Line& l = record(way);
-  const uint64_t addr = (tag(way) - 1) * cfg_.line_bytes;
+  const uint64_t addr = lineOf(way) * cfg_.line_bytes;
+  const Surface surf = surface(way);
   forEachRun(l.dirty, [&](uint32_t s, uint32_t e) {
-    out.push_back({addr + uint64_t(s) * sector_bytes_, (e - s) * sector_bytes_, l.surface});
+    out.push_back({addr + uint64_t(s) * sector_bytes_, (e - s) * sector_bytes_, surf});
   });
 }
 

@@ -10,11 +10,16 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "oit_rop/config/RopConfig.hpp"
 #include "oit_rop/memory/PortCalendar.hpp"
@@ -106,26 +111,37 @@ class CacheLevel final : public MemoryPort {
   unsigned sliceOf(uint64_t addr) const;
   uint32_t setOf(uint64_t addr) const;
   bool resident(uint64_t addr) const;  // the line holding addr is in the cache (any sector)
+  // The LRU clock's next stamp (tests: its 32-bit wrap renumbers the stamps).
+  void setLruClock(uint32_t next) { stamp_ = next - 1; }
 
  private:
-  // A way's state apart from its tag and LRU stamp. A set is one block of
-  // the tag store: its ways' tags, then their stamps, then these records, so
-  // a lookup compares the set's tags, 8 B per way (a 16-way set of a 128 MB
-  // level is 2 host cache lines instead of the 10 of whole records: the l3's
-  // lookups were most of the engines' time, bench/RESULTS-timing.md session
-  // 17), while a set still occupies one stretch of memory (three arrays
-  // touched a page each per set: +1 MB of resident memory on a 1024x512
-  // frame). All zero = an invalid way, so the store can be allocated zeroed
-  // by the system (calloc): the pages of sets never used are never touched (a
-  // 128 MB level has 2 M lines; a frame uses a fraction of them).
+  // A way's state apart from its tag, LRU stamp and surface. A set is one
+  // 64-byte-aligned block of the tag store: its ways' tags (32 bits: line
+  // number + 1), then their stamps (32 bits), then their surfaces (a byte),
+  // then these records, so a lookup compares the set's tags in one host
+  // cache line for 16 ways (the l2's and l3's tag lookups miss the host's
+  // caches in stores of megabytes: most of the engines' time,
+  // bench/RESULTS-timing.md sessions 17 and 20), and a set still occupies
+  // one stretch of memory (arrays apart touch a page each per set: +1 MB of
+  // resident memory on a 1024x512 frame). All zero = an invalid way, so the
+  // store can be allocated zeroed by the system (calloc): the pages of sets
+  // never used are never touched (a 128 MB level has 2 M lines; a frame uses
+  // a fraction of them).
   struct Line {
     Cycle ready = 0;  // its last fill's data is there
     uint32_t valid = 0, dirty = 0;
-    Surface surface = Surface::BlendArrays;  // of its last writer (write-backs count by it)
   };
+  static_assert(sizeof(Line) == 16);
   static constexpr size_t kNoWay = ~size_t(0);
-  // A way's share of its set's block in the tag store: its tag, its stamp, its Line.
-  static constexpr size_t kWayBytes = 2 * sizeof(uint64_t) + sizeof(Line);
+  // Where a set's records start in its block, and the block's size (a
+  // multiple of the host's 64-byte cache line, so that a set's tags never
+  // straddle two).
+  static constexpr size_t recordsOffset(unsigned ways) { return (size_t(ways) * 9 + 15) & ~size_t(15); }
+  static constexpr size_t blockBytes(unsigned ways) {
+    return (recordsOffset(ways) + size_t(ways) * sizeof(Line) + 63) & ~size_t(63);
+  }
+  // The largest line number a 32-bit tag holds (tags are line number + 1).
+  static constexpr uint64_t kMaxLine = 0xFFFFFFFEull;
   struct FreeDeleter {
     void operator()(void* p) const { std::free(p); }
   };
@@ -133,23 +149,66 @@ class CacheLevel final : public MemoryPort {
   // its way 0.
   uint32_t setIndex(uint64_t line) const;            // the line's set inside its slice
   size_t setOfLine(uint64_t line, unsigned& slice) const;  // the line's set (its way 0), and its slice
-  uint64_t* tagsOf(size_t way) const {  // the tags of the way's set (then its stamps, then its records)
-    return reinterpret_cast<uint64_t*>(store_.get() + (way >> way_shift_) * block_bytes_);
+  uint32_t* tagsOf(size_t way) const {  // the tags of the way's set (then its stamps, surfaces, records)
+    return reinterpret_cast<uint32_t*>(blocks_ + (way >> way_shift_) * block_bytes_);
   }
-  uint64_t& tag(size_t way) const { return tagsOf(way)[way & way_mask_]; }  // line number + 1; 0 = invalid
-  uint64_t& stamp(size_t way) const { return tagsOf(way)[cfg_.ways + (way & way_mask_)]; }  // LRU: larger = more recent
-  Line& record(size_t way) const { return reinterpret_cast<Line*>(tagsOf(way) + 2 * size_t(cfg_.ways))[way & way_mask_]; }
+  uint32_t& tag(size_t way) const { return tagsOf(way)[way & way_mask_]; }  // line number + 1; 0 = invalid
+  uint32_t& stamp(size_t way) const { return tagsOf(way)[cfg_.ways + (way & way_mask_)]; }  // LRU: larger = more recent
+  Surface& surface(size_t way) const {  // of the line's last writer (write-backs count by it)
+    return reinterpret_cast<Surface*>(tagsOf(way) + 2 * size_t(cfg_.ways))[way & way_mask_];
+  }
+  Line& record(size_t way) const {
+    return reinterpret_cast<Line*>(reinterpret_cast<unsigned char*>(tagsOf(way)) + records_offset_)[way & way_mask_];
+  }
+  // The line number a valid way holds.
+  uint64_t lineOf(size_t way) const { return uint64_t(tag(way)) - 1; }
+  // Refuses a line number a 32-bit tag cannot hold (an address past 2^32
+  // lines: 256 GiB with 64-byte lines; the model's address maps stay far
+  // below). Inline: one compare per access.
+  void checkLine(uint64_t line) const {
+    if (line > kMaxLine) [[unlikely]] lineOutOfRange(line);
+  }
+  [[noreturn]] void lineOutOfRange(uint64_t line) const;
   // The way holding `line` in the set `set`, or kNoWay.
   size_t find(size_t set, uint64_t line) const {
-    const uint64_t* const t = tagsOf(set);
-    for (unsigned w = 0; w < cfg_.ways; ++w)
-      if (t[w] == line + 1) return set + w;
+    const uint32_t* const t = tagsOf(set);
+    const uint32_t want = uint32_t(line + 1);
+    unsigned w = 0;
+#if defined(__SSE2__)
+    // Four tags per compare (a set's tags start on a 64-byte boundary; a
+    // line is in one way at most, so the first match is the match).
+    const __m128i k = _mm_set1_epi32(int(want));
+    for (; w + 4 <= cfg_.ways; w += 4) {
+      const __m128i four = _mm_load_si128(reinterpret_cast<const __m128i*>(t + w));
+      const unsigned m = unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(four, k))));
+      if (m) return set + w + unsigned(std::countr_zero(m));
+    }
+#endif
+    for (; w < cfg_.ways; ++w)
+      if (t[w] == want) return set + w;
     return kNoWay;
   }
   // A way for `line` in its set (invalid first, else LRU), the old line evicted.
-  size_t allocate(Cycle now, size_t set, uint64_t line);
+  size_t allocate(Cycle now, size_t set, uint64_t line) { return install(now, set, pickVictim(set), line); }
+  size_t pickVictim(size_t set) const;  // the way allocate() would take
+  size_t install(Cycle now, size_t set, size_t way, uint64_t line);  // `line` into `way`, its old line evicted
+  // Asks the host to bring the tags and stamps of the set `line` maps to
+  // into its caches (a hint: no state changes). The level above calls it
+  // for its victim before its own fill, so the two host cache misses overlap.
+  void prefetchSet(uint64_t line) const {
+    unsigned slice;
+    const unsigned char* const b = reinterpret_cast<const unsigned char*>(tagsOf(setOfLine(line, slice)));
+    __builtin_prefetch(b, 1);
+    __builtin_prefetch(b + 64, 1);
+  }
   void evict(Cycle now, size_t way);
-  void touchLru(size_t way) { stamp(way) = ++stamp_; }
+  // Stamps are 32 bits: when the clock wraps, every used set's stamps are
+  // renumbered 1..ways in their order (only the order inside a set matters).
+  void touchLru(size_t way) {
+    if (++stamp_ == 0) [[unlikely]] renumberStamps();
+    stamp(way) = stamp_;
+  }
+  void renumberStamps();
   // Port booking: the slice's port moves `bytes` from `now` on, in the
   // earliest capacity free (PortCalendar); returns the cycle the transfer
   // starts, `end` the cycle it is done.
@@ -186,14 +245,16 @@ class CacheLevel final : public MemoryPort {
   unsigned line_shift_ = 0;  // log2(line_bytes)
   int slice_shift_ = -1;     // log2(slices), -1 when not a power of two
   bool sets_pow2_ = false;
-  // The tag store: a block of block_bytes_ per set, slice-major (slice x sets + set); calloc'd.
+  // The tag store: a block of block_bytes_ per set, slice-major (slice x
+  // sets + set); calloc'd, blocks_ its first 64-byte boundary.
   std::unique_ptr<unsigned char[], FreeDeleter> store_;
-  size_t block_bytes_ = 0;  // ways x (tag + stamp + Line)
+  unsigned char* blocks_ = nullptr;
+  size_t block_bytes_ = 0, records_offset_ = 0;
   unsigned way_shift_ = 0;  // log2 of ways rounded up to a power of two
   size_t way_mask_ = 0;
   std::vector<uint64_t> set_used_;  // a bit per set (slice x sets + set) ever allocated into: dirtyRanges scans those
   std::vector<PortCalendar> ports_;  // per slice
-  uint64_t stamp_ = 0;
+  uint32_t stamp_ = 0;
   std::unique_ptr<MissClassifier> classes_;  // null: misses not classified
   LevelStats stats_;
 };

@@ -143,7 +143,7 @@ TEST(RootCauseAccount, UnloadedAccessWhileTheBusIsBusyIsBandwidth) {
   ASSERT_EQ(m.access(0, 8192, 64, false, Surface::BlendArrays), 82u);
   EXPECT_NEAR(m.busShare(0, 256), 20.0 / 256.0, 1e-12);
   RootCauseAccount a;
-  a.setBusShare([&m](Cycle from, Cycle to) { return m.busShare(from, to); });
+  a.setBusShare(BusShareFn::of(m));
   a.setWait(0, splitWait(0, 82, m.probe()));
   a.account(82);
   EXPECT_EQ(at(a, RootCause::DramLatency), 61u);

@@ -233,6 +233,33 @@ TEST(CacheLevel, ASectorMissIsAConflictOnlyWhenTheFullyAssociativeCacheHoldsTheS
   EXPECT_EQ(l2.stats().conflict_misses, 1u);
 }
 
+TEST(CacheLevel, LruOrderSurvivesTheStampClocksWrap) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(256, 4), 1000, below);  // one set of 4 ways
+  l2.setLruClock(0xFFFFFFFEu);
+  l2.access(0, 0, 64, false, Surface::Depth);    // A: stamp 0xFFFFFFFE
+  l2.access(1, 64, 64, false, Surface::Depth);   // B: 0xFFFFFFFF
+  l2.access(2, 128, 64, false, Surface::Depth);  // C: the clock wraps; A, B renumbered 1, 2; C 3
+  l2.access(3, 192, 64, false, Surface::Depth);  // D: 4
+  l2.access(4, 0, 64, false, Surface::Depth);    // A hit: 5, so B is the least recently used
+  l2.access(5, 256, 64, false, Surface::Depth);  // E evicts B (a wrap to stamp 0 would have evicted C)
+  EXPECT_FALSE(l2.resident(64));
+  for (uint64_t a : {0u, 128u, 192u, 256u}) EXPECT_TRUE(l2.resident(a)) << a;
+  EXPECT_EQ(l2.stats().misses[unsigned(Surface::Depth)], 5u);
+}
+
+TEST(CacheLevel, RefusesALineNumberItsTagsCannotHold) {
+  FakeBelow below;
+  CacheLevel l2("l2", small(4096, 4), 1000, below);
+  // Tags are 32 bits (line number + 1): line 0xFFFFFFFE is the last one.
+  const uint64_t last = 0xFFFFFFFEull * 64;
+  EXPECT_EQ(l2.access(0, last, 64, false, Surface::Depth), 120u);  // a miss: 20 + 100
+  EXPECT_TRUE(l2.resident(last));
+  EXPECT_FALSE(l2.resident(last + 64));
+  EXPECT_THROW(l2.access(200, last + 64, 64, false, Surface::Depth), std::runtime_error);
+  EXPECT_THROW(l2.insertVictim(200, last + 64, 64, 64, 1, 1, Surface::Depth), std::runtime_error);
+}
+
 TEST(CacheLevel, RejectsBadGeometry) {
   FakeBelow below;
   EXPECT_THROW(CacheLevel("l2", small(1000, 4), 1000, below), std::invalid_argument);  // not whole sets

@@ -34,6 +34,32 @@ TEST(PortCalendar, AnEarlierRequestFillsTheGapALaterBookingLeft) {
   EXPECT_EQ(p.used(101), 1u << 16);
 }
 
+TEST(PortCalendar, ARunOfEmptyCyclesStopsAtAPartlyBookedOne) {
+  PortCalendar p(16.0, 1000);
+  Cycle s, e;
+  p.book(10, 8, s, e);  // half of cycle 10
+  EXPECT_EQ(p.used(10), 1u << 15);
+  // 64 B from 8: cycles 8 and 9 whole, the other half of 10, all of 11, and
+  // half of 12 (4 cycles of capacity): done at 13.
+  p.book(8, 64, s, e);
+  EXPECT_EQ(s, 8u);
+  EXPECT_EQ(e, 13u);
+  EXPECT_EQ(p.used(9), 1u << 16);
+  EXPECT_EQ(p.used(10), 1u << 16);
+  EXPECT_EQ(p.used(11), 1u << 16);
+  EXPECT_EQ(p.used(12), 1u << 15);
+  // A run past the ring's end: the ring is 4096 cycles (2 x 1000 + 64
+  // rounded up to a power of two), from 3090 once a request at 4090 retires
+  // what is more than the lookback behind it, so to 7185; 64 KiB from 4090
+  // is 4096 cycles, to 8185: the ring grows in the middle of the run.
+  p.book(4090, 65536, s, e);
+  EXPECT_EQ(s, 4090u);
+  EXPECT_EQ(e, 4090u + 4096);
+  EXPECT_EQ(p.used(7185), 1u << 16);
+  EXPECT_EQ(p.used(4090 + 4095), 1u << 16);
+  EXPECT_EQ(p.used(4090 + 4096), 0u);
+}
+
 TEST(PortCalendar, FractionalRatesShareACycle) {
   PortCalendar p(43.5, 1000);  // 64 B = 1.47 cycles
   Cycle s, e;
