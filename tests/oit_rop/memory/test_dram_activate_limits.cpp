@@ -91,24 +91,24 @@ TEST(DramActivateWindow, RemembersTheLatestByTime) {
 
 // --- The controller ---
 
-struct Request {
+struct ReadRequest {
   uint64_t addr;
   uint32_t bytes;
 };
 
 // Books every read at cycle 0 (a deep queue); returns the cycle the last data
 // is on the bus.
-Cycle streamEnd(MemorySystem& m, const std::vector<Request>& rs) {
+Cycle readStreamEnd(MemorySystem& m, const std::vector<ReadRequest>& rs) {
   Cycle end = 0;
-  for (const Request& r : rs) end = std::max(end, m.access(0, r.addr, r.bytes, false, Surface::BlendArrays));
+  for (const ReadRequest& r : rs) end = std::max(end, m.access(0, r.addr, r.bytes, false, Surface::BlendArrays));
   return end;
 }
 
 // N one-burst reads rotating over the first `used` of a channel's `banks`
 // banks, each visit to a new row (plain map: bank b, row r at (r x banks + b)
 // x row_bytes).
-std::vector<Request> overBanks(unsigned n, unsigned used, unsigned banks, unsigned row_bytes) {
-  std::vector<Request> rs;
+std::vector<ReadRequest> overBanks(unsigned n, unsigned used, unsigned banks, unsigned row_bytes) {
+  std::vector<ReadRequest> rs;
   for (unsigned i = 0; i < n; ++i) rs.push_back({(uint64_t(i / used) * banks + i % used) * row_bytes, 64});
   return rs;
 }
@@ -136,14 +136,14 @@ DramConfig closedPage(unsigned trrd, unsigned tfaw) {
 TEST(DramActivateLimits, ClosedPageOverAllBanksIsFourActivatesPerTfaw) {
   DramConfig c = closedPage(4, 40);
   MemorySystem m(c, kRoundMhz);
-  EXPECT_EQ(streamEnd(m, overBanks(800, 8, c.banks, c.row_bytes)), kCtrl + 40 * 199 + 3 * 4 + kTrcd + kCl + kBurst);
+  EXPECT_EQ(readStreamEnd(m, overBanks(800, 8, c.banks, c.row_bytes)), kCtrl + 40 * 199 + 3 * 4 + kTrcd + kCl + kBurst);
   EXPECT_EQ(m.stats().row_misses, 800u);
   // Off, the banks bound it: 800 reads, 100 per bank, a bank's activates 37
   // apart: bank 7's last at 7 x 4 + 99 x 37 after the first (the first
   // activates 4 apart behind the bus), ending 26 later: 40 + 28 + 3,663 + 26.
   c.trrd = c.tfaw = 0;
   MemorySystem off(c, kRoundMhz);
-  EXPECT_EQ(streamEnd(off, overBanks(800, 8, c.banks, c.row_bytes)), kCtrl + 7 * kBurst + 99 * (kTrcd + kCl + kBurst + kTrp) +
+  EXPECT_EQ(readStreamEnd(off, overBanks(800, 8, c.banks, c.row_bytes)), kCtrl + 7 * kBurst + 99 * (kTrcd + kCl + kBurst + kTrp) +
                                                                     kTrcd + kCl + kBurst);
 }
 
@@ -157,10 +157,10 @@ TEST(DramActivateLimits, ClosedPageOverAllBanksIsFourActivatesPerTfaw) {
 TEST(DramActivateLimits, TwoBankAlternationIsOneActivatePerTrrd) {
   DramConfig c = closedPage(20, 0);
   MemorySystem closed(c, kRoundMhz);
-  EXPECT_EQ(streamEnd(closed, overBanks(500, 2, c.banks, c.row_bytes)), kCtrl + 20 * 499 + kTrcd + kCl + kBurst);
+  EXPECT_EQ(readStreamEnd(closed, overBanks(500, 2, c.banks, c.row_bytes)), kCtrl + 20 * 499 + kTrcd + kCl + kBurst);
   c.open_row = true;
   MemorySystem open(c, kRoundMhz);
-  EXPECT_EQ(streamEnd(open, overBanks(500, 2, c.banks, c.row_bytes)), kCtrl + 20 * 499 + kTrcd + kCl + kBurst);
+  EXPECT_EQ(readStreamEnd(open, overBanks(500, 2, c.banks, c.row_bytes)), kCtrl + 20 * 499 + kTrcd + kCl + kBurst);
   EXPECT_EQ(open.stats().row_misses, 500u);
 }
 
@@ -171,11 +171,11 @@ TEST(DramActivateLimits, TwoBankAlternationIsOneActivatePerTrrd) {
 TEST(DramActivateLimits, LimitsThatDoNotBindChangeNothing) {
   DramConfig c = roundDramConfig(1);
   c.banks = 16;
-  std::vector<Request> rs = overBanks(1600, 16, c.banks, c.row_bytes);
+  std::vector<ReadRequest> rs = overBanks(1600, 16, c.banks, c.row_bytes);
   for (unsigned i = 0; i < 400; ++i) rs.push_back({uint64_t(i % 128) * 64, 64});  // then row hits in bank 0
   MemorySystem off(c, kRoundMhz);
   std::vector<Cycle> want;
-  for (const Request& r : rs) want.push_back(off.access(0, r.addr, r.bytes, false, Surface::BlendArrays));
+  for (const ReadRequest& r : rs) want.push_back(off.access(0, r.addr, r.bytes, false, Surface::BlendArrays));
   c.trrd = 4;
   c.tfaw = 16;
   MemorySystem on(c, kRoundMhz);
@@ -214,7 +214,7 @@ TEST(DramActivateLimits, PresetsClosedPageIsBoundByTheActivateWindow) {
     const double bound = m.controllerCycles() + m.trcdCycles() + m.clCycles() + burst +
                          std::max({k * burst, 99 * chain, acts});
     EXPECT_EQ(acts, std::max({k * burst, 99 * chain, acts})) << preset << ": the window binds";
-    const double got = double(streamEnd(m, overBanks(n, d.banks, d.banks, d.row_bytes)));
+    const double got = double(readStreamEnd(m, overBanks(n, d.banks, d.banks, d.row_bytes)));
     EXPECT_GE(got, bound) << preset;
     EXPECT_LE(got, 1.03 * bound) << preset << ": " << 100 * (got / bound - 1) << " % above";
   }
