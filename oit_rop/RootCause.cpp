@@ -90,6 +90,13 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest) 
   return w;
 }
 
+WaitSplit MissWaits::freeing(Cycle frees, const WaitSplit& fallback) const {
+  const std::pair<Cycle, WaitSplit>* best = nullptr;
+  for (size_t i = 0; i < size_; ++i)
+    if (ring_[i].first >= frees && (!best || ring_[i].first < best->first)) best = &ring_[i];
+  return best ? best->second : fallback;
+}
+
 void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth) {
   bandwidth = n && bus ? std::min<uint64_t>(n, uint64_t(double(n) * bus(from, to) + 0.5)) : 0;
   latency = n - bandwidth;

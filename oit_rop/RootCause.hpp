@@ -8,10 +8,13 @@
 // (TimingStats.hpp) stay beside it: they say where fragments wait, this says why.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <utility>
+#include <vector>
 
 #include "oit_rop/Types.hpp"
 
@@ -82,6 +85,31 @@ struct DramProbe {
 // proportions of d.queue; all zero: the bus's), the transfer of the rest of
 // its data, the rest `rest`.
 WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest = RootCause::RopCacheMiss);
+
+// The waits of a partition's latest misses, by the cycle each is ready. An
+// access refused for a full miss queue waits for the first entry to free: for
+// the oldest miss in flight, whose wait is then in its tail (queueing), not
+// for the latest miss, just issued, whose wait is then in its front (its
+// unloaded access). Taking the latest's charged a resolve bound by the
+// channel's activate limits (test_bounds.cpp, DramActivateLimitFrame) 16-20 %
+// dram_latency.
+class MissWaits {
+ public:
+  // Keeps the latest `n` (the miss queue's entries: the oldest in flight is among them).
+  explicit MissWaits(unsigned n = 1) : ring_(std::max(1u, n)) {}
+  void add(Cycle ready, const WaitSplit& w) {
+    ring_[next_] = {ready, w};
+    next_ = next_ + 1 == ring_.size() ? 0 : next_ + 1;
+    size_ = std::min<size_t>(size_ + 1, ring_.size());
+  }
+  // The wait of the miss a miss queue that frees at `frees` waits for: the
+  // one kept whose ready cycle is the first at or after it; none: `fallback`.
+  WaitSplit freeing(Cycle frees, const WaitSplit& fallback) const;
+
+ private:
+  std::vector<std::pair<Cycle, WaitSplit>> ring_;
+  size_t next_ = 0, size_ = 0;
+};
 
 // The share of the DRAM buses busy over [from, to) (MemorySystem::busShare):
 // the part of a wait's unloaded access during which the buses moved other

@@ -51,6 +51,7 @@ RopPartition::RopPartition(sc_core::sc_module_name name, unsigned id, const Part
   merge_skip_ = cfg_.skip.lazy_merge && s_.array_rows > 1;
   miss_rest_ = cfg_.l2.size_bytes || cfg_.l3.size_bytes ? RootCause::L2 : RootCause::RopCacheMiss;
   root_.setBusShare(BusShareFn::of(memory));
+  miss_waits_ = MissWaits(cfg_.cache.miss_queue);
   if (front_.defersInserts())
     rmw_ = std::make_unique<BlendArrayRmw>(cfg_.lock.mode, front_.pixelState(), cfg_.lock.capacity, front_.passes());
   payload_.set_extension(new DramExtension);  // owned (and freed) by the payload
@@ -309,6 +310,7 @@ void RopPartition::resolvePhase() {
         if (r == kNever) {
           if (!cache_.refusedBySet()) {
             retry_at_ = cache_.missQueueFreesAt();
+            refused_wait_ = miss_waits_.freeing(retry_at_, last_miss_);
           } else if (pf.empty() && !computing && !issuing_pins.empty()) {
             // Only this tile's own lines hold the set (more of its lines in
             // one set than ways): they were read, so they go, and the read goes on.
@@ -316,6 +318,7 @@ void RopPartition::resolvePhase() {
             continue;
           } else {
             retry_at_ = kNever;  // until a resolved tile's lines are released
+            refused_wait_ = last_miss_;
           }
           refused = true;
           break;
@@ -327,7 +330,10 @@ void RopPartition::resolvePhase() {
           lines_wait = cache_.stats().misses != misses ? splitWait(now, r, memory_.probe(), miss_rest_)
                        : r > now + cfg_.cache.hit_latency ? last_miss_
                                                            : WaitSplit{now, now, now, RootCause::RopCacheMiss};
-          if (cache_.stats().misses != misses) last_miss_ = lines_wait;
+          if (cache_.stats().misses != misses) {
+            last_miss_ = lines_wait;
+            miss_waits_.add(r, lines_wait);
+          }
         }
         ++line_next;
       }
@@ -412,7 +418,7 @@ void RopPartition::resolvePhase() {
       root_.setWait(now, last_write_wait_);
     } else {
       setStatus(Stage::Resolve, StageStatus::stall(s_.bounded ? Stall::CacheMissWait : Stall::ListWalk));
-      root_.setWait(now, pf.empty() ? last_miss_ : pf.front().wait);
+      root_.setWait(now, !pf.empty() ? pf.front().wait : refused ? refused_wait_ : last_miss_);
     }
     Cycle next = now + 1;
     if (!moved && cfg_.skip.idle_cycles) {

@@ -217,10 +217,14 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
       // A miss waits for memory (a fast-clear fill for the cache alone); a
       // hit under a fill in flight for that fill, which the partition's
       // latest miss stands for.
-      if (cache_.stats().misses != misses) last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
+      if (cache_.stats().misses != misses) {
+        last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
+        miss_waits_.add(ready, last_miss_);
+      }
       return true;
     }
     retry_at_ = cache_.refusedBySet() ? kNever : cache_.missQueueFreesAt();
+    refused_wait_ = retry_at_ == kNever ? last_miss_ : miss_waits_.freeing(retry_at_, last_miss_);
     return false;
   }
 
@@ -265,6 +269,10 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
   bool starving_ = false;
   RootCauseAccount root_;     // this partition's cycles by root cause
   WaitSplit last_miss_;       // the latest blend-array miss's wait (root causes)
+  MissWaits miss_waits_;      // the latest misses' waits (as many as the miss queue holds)
+  // A refused access's wait: a full miss queue's, the miss that frees its
+  // first entry; a full set's, the latest miss (DESIGN.md "Root causes").
+  WaitSplit refused_wait_;
   WaitSplit last_depth_;      // the latest depth-tile read's wait
   RootCause miss_rest_;       // a miss's wait beyond DRAM: the shared levels' (l2) or the ROP cache's
   std::vector<uint32_t> resolve_fill_;  // resolveLines' sectors per line of the tile

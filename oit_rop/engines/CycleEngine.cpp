@@ -227,7 +227,7 @@ bool CycleEngine::step() {
   } else if (head_waits && p.cache_q_.front().miss) {
     p.root_.setWait(now, p.cache_q_.front().wait);
   } else if (refused) {
-    p.root_.setWait(now, p.last_miss_);
+    p.root_.setWait(now, p.refused_wait_);
   } else if (p.lock_.waiting()) {
     p.root_.set(now, RootCause::LockWait);
   } else if (c1 == stall(Stall::CacheMissWait)) {

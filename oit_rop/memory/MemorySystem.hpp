@@ -160,6 +160,8 @@ class MemorySystem {
   // (refresh_to 0: up to where the run could start).
   struct RunPlace {
     uint64_t earliest = 0, column = 0, xfer = 0;
+    uint64_t hold = 0;        // the activate limits' (tRRD, tFAW) hold on its activate
+    bool after_data = false;  // its first command waited for its bank's last data (a bus-delayed transfer)
     uint64_t refresh_wait = 0, refresh_from = 0, refresh_to = 0;
     bool refreshed = false;  // a refresh moved it or closed its row
   };

@@ -242,13 +242,18 @@ TEST_P(Bounds, DramBankConflictFrame) {
 // Activate k (counted by row_misses, one per closed-page run) comes no earlier
 // than floor(k / 4) tFAW after the first, and before the frame's end, so the
 // frame is at least floor((row_misses - 1) / 4) x 345 cycles (measured +0.4 %
-// on both engines). The wait is the bank's side of the controller:
-// dram_bank_conflict bounds the frame, though with about two thirds of the
-// partition-cycles, not 90 %: each request's unloaded latency (83 of the ~86
-// cycles between activates) is charged dram_latency where the buses were idle
-// and the rest of its queueing is split by the 256-cycle blocks' records
-// (dram_latency and dram_bandwidth about 15 % each: the root causes' coarse
-// rule, DESIGN.md; not analysed further).
+// on both engines). The wait is the bank's side of the controller, and
+// dram_bank_conflict bounds the frame with 97.2 % of the partition-cycles on
+// the cycle engine, 93.4 % on the approximate one. (Until this was asserted,
+// 69 % and 65 %: the resolve's acquires, refused for a full miss queue, were
+// charged the latest miss's wait, its front, i.e. its unloaded access, 84 of
+// the ~86 cycles between activates: dram_latency 15.8 % / 19.9 %; and a
+// fill's queueing behind the bank's row cycle (tRAS + tRP, 56 cycles) and the
+// window (30 more) was split by the bus's record, its 12 % busy time
+// dram_bandwidth: 13.5 % / 13.2 %. Now the refused acquire takes the wait of
+// the miss that frees the queue, and a run its bank placed is the bank's;
+// DESIGN.md "Root causes". The approximate engine's transparent phase still
+// charges a full miss queue the latest miss's wait: its dram_latency 4.5 %.)
 TEST_P(Bounds, DramActivateLimitFrame) {
   RopConfig c = dramFrameConfig(GetParam());
   c.dram.open_row = false;
@@ -263,7 +268,8 @@ TEST_P(Bounds, DramActivateLimitFrame) {
   EXPECT_LT(r.stats["timing"]["utilization"]["dram_bus"].get<double>(), 0.15);
   const auto& t = r.stats["timing"];
   EXPECT_EQ(t["bound_by"]["resource"].get<std::string>(), "dram_bank_conflict") << t["root_cause_cycles"].dump();
-  EXPECT_GE(t["bound_by"]["share"].get<double>(), 0.60) << t["root_cause_cycles"].dump();
+  EXPECT_GE(t["bound_by"]["share"].get<double>(), GetParam() == SimEngine::CycleStepped ? 0.95 : 0.90)
+      << t["root_cause_cycles"].dump();
 }
 
 // And made of turnarounds: a write queue of one burst (every write-back

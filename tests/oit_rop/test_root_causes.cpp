@@ -253,4 +253,62 @@ TEST(RootCauseAccount, TheFinalDrainIsSplitByWhatTheDramDid) {
   EXPECT_EQ(at(a, RootCause::DramBandwidth), 5u);
 }
 
+// A wait the bank's row cycle or the channel's activate limits set is the
+// bank's, however busy the bus was meanwhile (closed page, round
+// configuration; MEMORY.md "Activate limits"):
+//  - tRAS 30: read A of bank 0 asked at 0 activates at 40 (data [62, 66));
+//    the bank may activate again at max(66, 40 + 30) + tRP = 81 (its row
+//    cycle, not its data). Read B of bank 1 asked at 0: data [66, 70). Read C
+//    of bank 0 asked at 0: activate 81, column 92, data [103, 107): 66
+//    unloaded, 41 of queueing, all of it the bank's (until this change 8 of
+//    it, 62 to 70, were dram_bandwidth: the bus moved A and B meanwhile,
+//    though on any bus C's activate waits for tRAS + tRP);
+//  - tRRD 4, tFAW 40: reads of banks 0 to 4 asked at 0 activate at 40, 44,
+//    48, 52 and 40 + tFAW = 80; the fifth's data [102, 106), done 106: 66
+//    unloaded, 40 of queueing, all the bank's (it was 16 of bus, the four
+//    reads' data [62, 78), and 24 of bank).
+// A read of `addr` asked at 0, done at `done`: 66 cycles unloaded, the rest
+// of its queueing the bank's, none the bus's.
+void expectQueueingAllTheBanks(MemorySystem& m, uint64_t addr, Cycle done) {
+  m.resetProbe();
+  ASSERT_EQ(m.access(0, addr, 64, false, Surface::BlendArrays), done);
+  const RootCauseAccount a = chargedAlone(0, done, splitWait(0, done, m.probe()));
+  EXPECT_EQ(at(a, RootCause::DramLatency), 66u);
+  EXPECT_EQ(at(a, RootCause::DramBankConflict), done - 66);
+  EXPECT_EQ(at(a, RootCause::DramBandwidth), 0u);
+}
+TEST(RootCauseAccount, ARowCycleOrActivateLimitWaitIsTheBanksWhateverTheBusMoved) {
+  DramConfig c = roundDramConfig(1);
+  c.open_row = false;
+  c.tras = 30;
+  MemorySystem m(c, kRoundMhz);
+  ASSERT_NE(m.bankOf(8192), m.bankOf(0));
+  ASSERT_EQ(m.bankOf(8 * 8192), m.bankOf(0));
+  ASSERT_EQ(m.access(0, 0, 64, false, Surface::BlendArrays), 66u);
+  ASSERT_EQ(m.access(0, 8192, 64, false, Surface::BlendArrays), 70u);
+  expectQueueingAllTheBanks(m, 8 * 8192, 107);
+
+  c.tras = 0;
+  c.trrd = 4;
+  c.tfaw = 40;
+  MemorySystem n(c, kRoundMhz);
+  for (uint64_t bank = 0; bank < 4; ++bank)
+    ASSERT_EQ(n.access(0, bank * 8192, 64, false, Surface::BlendArrays), 66u + 4 * bank);
+  expectQueueingAllTheBanks(n, 4 * 8192, 106);
+}
+
+// A refused access waits for the miss queue's first free entry: the miss
+// whose line is ready first at or after it frees (MissWaits), not the latest.
+TEST(RootCauseAccount, MissWaitsGiveTheMissThatFreesTheQueue) {
+  const WaitSplit w100{10, 20, 30}, w130{11, 21, 31}, w150{12, 22, 32}, fallback{1, 2, 3};
+  MissWaits q(2);
+  q.add(100, w100);
+  EXPECT_EQ(q.freeing(100, fallback), w100);
+  q.add(150, w150);
+  q.add(130, w130);  // two kept: 100 is forgotten
+  EXPECT_EQ(q.freeing(90, fallback), w130);
+  EXPECT_EQ(q.freeing(131, fallback), w150);
+  EXPECT_EQ(q.freeing(151, fallback), fallback);
+}
+
 }  // namespace
