@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
-# Cycle and DRAM-byte error of coarser quanta (sim.quantum_cycles: partitions
-# run up to that many cycles apart and book DRAM in call order) against
-# lockstep partitions (quantum 1): the default (200) and 1000, every algorithm
-# on three 320x180 scenes, igpu preset, idle skipping on. Prints a Markdown
-# table (results.md).
+# Cycle and byte error of coarser quanta (sim.quantum_cycles: partitions run up
+# to that many cycles apart and book the shared l2's ports and DRAM in call
+# order) against lockstep partitions (quantum 1): the default (200) and 1000,
+# every algorithm on three 320x180 scenes, igpu (= iris-pro-5200) preset, idle
+# skipping on; twice: the preset as it is (the 6 MiB l2 holds these frames,
+# DRAM moves nothing) and without its l2 and l3 (l2.size_bytes=0,
+# l3.size_bytes=0: every ROP-cache miss and write-back goes to DRAM, the booking
+# this page first measured). Prints a Markdown table per configuration
+# (results.md).
 #   reports/repro/quantum-error/run.sh [OITSIM=build/apps/oitsim] [WORKDIR=out/repro/quantum-error]
 set -euo pipefail
 oitsim=${1:-build/apps/oitsim}
@@ -16,30 +20,53 @@ for t in particles glass demo; do
   for a in $algos; do
     for q in $quanta; do
       "$oitsim" run -t "$work/$t.oitt" -a "$a" -o "$work/${t}_${a}_q$q" -q --set sim.quantum_cycles=$q >/dev/null
+      "$oitsim" run -t "$work/$t.oitt" -a "$a" -o "$work/${t}_${a}_nol2_q$q" -q --set sim.quantum_cycles=$q \
+        --set l2.size_bytes=0 --set l3.size_bytes=0 >/dev/null
     done
   done
 done
 python3 - "$work" $algos <<'PY'
 import json, sys
 work, algos = sys.argv[1], sys.argv[2:]
-print("| scene | algorithm | cycles, quantum 1 | quantum 200: cycles | error | DRAM bytes error "
-      "| quantum 1000: cycles | error | DRAM bytes error |")
-print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-worst = {200: 0.0, 1000: 0.0}
-for t in ["particles", "glass", "demo"]:
-    for a in algos:
-        r = {}
-        for q in (1, 200, 1000):
-            s = json.load(open(f"{work}/{t}_{a}_q{q}/report.json"))
-            m = s["memory"]
-            r[q] = (s["timing"]["cycles"], m["dram_read_bytes"]["total"] + m["dram_write_bytes"]["total"])
-        row = f"| {t} | {a} | {r[1][0]:,} |"
-        for q in (200, 1000):
-            ce = 100 * (r[q][0] - r[1][0]) / r[1][0]
-            be = 100 * (r[q][1] - r[1][1]) / r[1][1]
-            worst[q] = max(worst[q], abs(ce))
-            row += f" {r[q][0]:,} | {ce:+.2f} % | {be:+.3f} % |"
-        print(row.replace(",", " "))
-print()
-print(f"Largest cycle error: quantum 200 {worst[200]:.2f} %, quantum 1000 {worst[1000]:.2f} %.")
+
+
+def below_rop(m):
+    """Bytes between the ROP caches and the level below them: the l2 when there is one, else DRAM."""
+    levels = m.get("levels", [])
+    if len(levels) > 1:
+        return levels[1]["read_bytes"] + levels[1]["write_bytes"]
+    return m["dram_read_bytes"]["total"] + m["dram_write_bytes"]["total"]
+
+
+def err(new, base):
+    return "0 B" if base == 0 and new == 0 else (f"{new - base:+,} B" if base == 0 else f"{100 * (new - base) / base:+.3f} %")
+
+
+for suffix, title, what in [("", "iris-pro-5200 as it is", "l2 bytes"),
+                            ("_nol2", "iris-pro-5200 without l2 and l3", "DRAM bytes")]:
+    print(f"**{title}** (bytes: between the ROP caches and the {'l2' if not suffix else 'DRAM'}; "
+          "bound by: the quantum-1 run's `timing.bound_by`)")
+    print()
+    print(f"| scene | algorithm | bound by | cycles, quantum 1 | quantum 200: cycles | error | {what} error "
+          f"| quantum 1000: cycles | error | {what} error |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    worst = {200: (0.0, ""), 1000: (0.0, "")}
+    for t in ["particles", "glass", "demo"]:
+        for a in algos:
+            r = {}
+            for q in (1, 200, 1000):
+                s = json.load(open(f"{work}/{t}_{a}{suffix}_q{q}/report.json"))
+                r[q] = (s["timing"]["cycles"], below_rop(s["memory"]), s["timing"]["bound_by"])
+            b = r[1][2]
+            row = f"| {t} | {a} | {b['resource']} {100 * b['share']:.0f} % | {r[1][0]:,} |"
+            for q in (200, 1000):
+                ce = 100 * (r[q][0] - r[1][0]) / r[1][0]
+                if abs(ce) > worst[q][0]:
+                    worst[q] = (abs(ce), f"{t} {a}")
+                row += f" {r[q][0]:,} | {ce:+.2f} % | {err(r[q][1], r[1][1])} |"
+            print(row.replace(",", " "))
+    print()
+    print(f"Largest cycle error: quantum 200 {worst[200][0]:.2f} % ({worst[200][1]}), "
+          f"quantum 1000 {worst[1000][0]:.2f} % ({worst[1000][1]}).")
+    print()
 PY
