@@ -54,7 +54,7 @@ def bottleneck_table(points, configs):
             "Largest stall: the per-stage stall cycles (summed over partitions, as a share of cycles x partitions) "
             "of the stage and cause that stall most, waiting for upstream (<code>input_starved</code>) left out; "
             "the timing model's own <code>bound_by</code> replaces it when reports carry it. ") +
-            "DRAM utilisation: mean GB/s over the channels' peak; cache: the blend-array tile cache. Click a header "
+            "DRAM utilisation: mean GB/s over the channels' peak; cache: each partition's ROP cache of blending-array lines (<code>cache.line_bytes</code>). Click a header "
             "to sort.</p>")]
     for conf in [c for c in configs.all_labels(points) if c != configs.FUNCTIONAL]:
         rows = []

@@ -1,4 +1,4 @@
-// Blending-array tile cache: hit rates, victims, DRAM bytes and latencies
+// Blending-array cache (the ROP cache): hit rates, victims, DRAM bytes and latencies
 // computed by hand (policies in oit_rop/memory/MEMORY.md). Against a plain
 // reference on random streams: test_blend_array_cache_reference.cpp; lines
 // apart from tiles and sectors: test_blend_array_cache_sectors.cpp.

@@ -1,4 +1,4 @@
-// Blending-array tile cache against a reference that writes the policies of
+// Blending-array cache (the ROP cache) against a reference that writes the policies of
 // oit_rop/memory/MEMORY.md out plainly, on random streams of accesses.
 #include <gtest/gtest.h>
 
