@@ -7,6 +7,7 @@
 // and the draws the trace cannot express listed with why. See traces/CAPTURE.md.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -74,6 +75,10 @@ struct ApitraceResult {
   uint64_t first_record_capacity = 0;  // the first run's record buffer (records), with replays = 2
   uint64_t record_capacity = 0;        // the record buffer of the run kept (records; 0: nothing recorded)
   uint64_t record_limit = 0;           // records GL's largest storage block holds (0: not asked)
+  // GL objects deleted while the interposer's stream was open (the run kept), by
+  // the kind the interposer tracks (interposer/CaptureStream.hpp, DeletedKind):
+  // the application's programs it knew, its own --verify textures and renderbuffers.
+  std::array<uint32_t, 3> deleted{};
 };
 
 // Throws std::invalid_argument naming the file when it is not an apitrace trace

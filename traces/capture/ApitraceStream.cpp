@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <fstream>
 #include <optional>
 #include <stdexcept>
@@ -233,10 +234,19 @@ class MappedStream {
   uint64_t size_ = 0;
 };
 
+// The version of a stream that starts with the interposer's magic (its last
+// character), or 0 when it does not.
+uint32_t streamVersion(const char* data, uint64_t size) {
+  if (size < sizeof st::kMagic || std::memcmp(data, st::kMagic, st::kMagicPrefix) != 0) return 0;
+  const char v = data[st::kMagicPrefix];
+  return v >= '1' && v <= '9' ? uint32_t(v - '0') : 0;
+}
+
 StreamScan scanBytes(const char* data, uint64_t size) {
   StreamScan s;
   uint64_t pos = sizeof(st::StreamHeader);
-  if (size < pos) return s;
+  // Another version's chunks are not this one's: readStream refuses the stream.
+  if (size < pos || streamVersion(data, size) != st::kVersion) return s;
   while (size - pos >= sizeof(st::ChunkHeader)) {
     st::ChunkHeader c;
     std::memcpy(&c, data + pos, sizeof c);
@@ -298,6 +308,10 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
   result.renderer_log = readFile(log_path);
   const MappedStream data(stream_path, true);
   const std::string log_tail = tail(result.renderer_log, 3);
+  if (const uint32_t v = streamVersion(data.data(), data.size()); v != 0 && v != st::kVersion)
+    throw std::runtime_error(fmt::format("{}: the interposer {} writes capture stream version {}, this oitsim reads "
+                                         "version {}: use the interposer built with this oitsim (next to it)",
+                                         o.trace, interposer, v, st::kVersion));
   auto retracerFailed = [&](const std::string& what) {
     return std::runtime_error(fmt::format("{}: {} {}{}", o.trace, retracer, what,
                                           log_tail.empty() ? "" : "; its last output: " + log_tail));
@@ -404,6 +418,8 @@ ApitraceResult readStream(const ApitraceOptions& o, const std::string& retracer,
   }
   result.record_capacity = end->record_capacity;
   result.record_limit = end->record_limit;
+  static_assert(std::tuple_size_v<decltype(result.deleted)> == st::kDeletedKindCount);
+  std::copy(std::begin(end->deleted), std::end(end->deleted), result.deleted.begin());
   return result;
 }
 

@@ -9,6 +9,12 @@
 //   frames N
 //   fbo 0|1        1: draw into a framebuffer object (RGBA8 + DEPTH24) and blit it
 //                  to the window before each swap, as many applications do
+//   churn 0|1      1: at the start of every frame, delete every draw's program and
+//                  make it again (GL may give the name again), and make and delete a
+//                  texture and a buffer
+//   texturenames A B  at the start of every frame, glDeleteTextures of the names A to
+//                  B, which the application never made, then make one texture of its
+//                  own (4 x 4 RGBA8; GL gives the lowest free name)
 //   draw KIND BLEND DEPTH R G B A VERTICES      then VERTICES lines "x y z w"
 // KIND: glsl120 (gl_FragColor), glsl330 (core `out`), discard (3.30 core, discards
 // the pixels with odd x + y), fixed (no program: fixed function, client arrays),
@@ -21,7 +27,9 @@
 // the frame's size, resolved into the frame's target afterwards), +stencil (the
 // stencil test on, GL_EQUAL 0 against a stencil buffer cleared to 0: every
 // fragment passes, but coverage depends on the stencil; needs fbo 1),
-// +stencilalways (the stencil test on with GL_ALWAYS: coverage does not depend on it).
+// +stencilalways (the stencil test on with GL_ALWAYS: coverage does not depend on it),
+// +window (drawn into the window, framebuffer 0, although the scene has fbo 1; the
+// window's depth is cleared with the frame's target).
 // BLEND: off, over (SRC_ALPHA, ONE_MINUS_SRC_ALPHA), premul (ONE,
 // ONE_MINUS_SRC_ALPHA), additive (ONE, ONE). DEPTH: off, test (LESS, no writes),
 // write (LESS and writes).
@@ -42,13 +50,14 @@ namespace {
 
 struct Draw {
   std::string kind, blend, depth;
-  bool msaa = false, stencil = false, stencil_always = false;
+  bool msaa = false, stencil = false, stencil_always = false, window = false;
   float colour[4] = {};
   std::vector<float> clip;  // x y z w per vertex
 };
 
 struct Scene {
-  int width = 0, height = 0, frames = 1, fbo = 0;
+  int width = 0, height = 0, frames = 1, fbo = 0, churn = 0;
+  unsigned texture_names[2] = {0, 0};  // texturenames A B (0 0: none)
   std::vector<Draw> draws;
 };
 
@@ -69,6 +78,10 @@ Scene readScene(const char* path) {
       in >> s.frames;
     } else if (key == "fbo") {
       in >> s.fbo;
+    } else if (key == "churn") {
+      in >> s.churn;
+    } else if (key == "texturenames") {
+      in >> s.texture_names[0] >> s.texture_names[1];
     } else if (key == "draw") {
       Draw d;
       size_t n = 0;
@@ -79,6 +92,7 @@ Scene readScene(const char* path) {
         if (modifier == "msaa") d.msaa = true;
         else if (modifier == "stencil") d.stencil = true;
         else if (modifier == "stencilalways") d.stencil_always = true;
+        else if (modifier == "window") d.window = true;
         else die("unknown draw modifier '+" + modifier + "' in " + path);
       }
       d.clip.resize(4 * n);
@@ -120,6 +134,8 @@ struct Gl {
   PFNGLUNIFORM4FVPROC Uniform4fv = proc<PFNGLUNIFORM4FVPROC>("glUniform4fv");
   PFNGLUNIFORM1FPROC Uniform1f = proc<PFNGLUNIFORM1FPROC>("glUniform1f");
   PFNGLGENBUFFERSPROC GenBuffers = proc<PFNGLGENBUFFERSPROC>("glGenBuffers");
+  PFNGLDELETEBUFFERSPROC DeleteBuffers = proc<PFNGLDELETEBUFFERSPROC>("glDeleteBuffers");
+  PFNGLDELETEPROGRAMPROC DeleteProgram = proc<PFNGLDELETEPROGRAMPROC>("glDeleteProgram");
   PFNGLBINDBUFFERPROC BindBuffer = proc<PFNGLBINDBUFFERPROC>("glBindBuffer");
   PFNGLBUFFERDATAPROC BufferData = proc<PFNGLBUFFERDATAPROC>("glBufferData");
   PFNGLGENVERTEXARRAYSPROC GenVertexArrays = proc<PFNGLGENVERTEXARRAYSPROC>("glGenVertexArrays");
@@ -292,12 +308,44 @@ int main(int argc, char** argv) {
     if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) die("incomplete multisample framebuffer");
   }
   glViewport(0, 0, scene.width, scene.height);
+  bool window_draws = false;
+  for (const Draw& d : scene.draws) window_draws = window_draws || d.window;
   for (int frame = 0; frame < scene.frames; ++frame) {
-    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    if (scene.churn) {
+      for (size_t i = 0; i < scene.draws.size(); ++i)
+        if (programs[i]) {
+          gl.DeleteProgram(programs[i]);
+          programs[i] = program(gl, scene.draws[i].kind);
+        }
+      GLuint tex = 0, buf = 0;
+      glGenTextures(1, &tex);
+      glBindTexture(GL_TEXTURE_2D, tex);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, 4, 4, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+      glBindTexture(GL_TEXTURE_2D, 0);
+      glDeleteTextures(1, &tex);
+      gl.GenBuffers(1, &buf);
+      gl.BindBuffer(GL_ARRAY_BUFFER, buf);
+      gl.BufferData(GL_ARRAY_BUFFER, 64, nullptr, GL_STATIC_DRAW);
+      gl.BindBuffer(GL_ARRAY_BUFFER, 0);
+      gl.DeleteBuffers(1, &buf);
+    }
+    if (scene.texture_names[1]) {
+      for (GLuint name = scene.texture_names[0]; name <= scene.texture_names[1]; ++name) glDeleteTextures(1, &name);
+      GLuint tex = 0;
+      glGenTextures(1, &tex);
+      glBindTexture(GL_TEXTURE_2D, tex);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, 4, 4, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+      glBindTexture(GL_TEXTURE_2D, 0);
+    }
     glClearColor(0, 0, 0, 0);
     glDepthMask(GL_TRUE);
     glClearDepth(1.0);
     glClearStencil(0);
+    if (window_draws && fbo) {
+      gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    }
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | (stencil ? GL_STENCIL_BUFFER_BIT : 0));
     for (size_t i = 0; i < scene.draws.size(); ++i) {
       const Draw& d = scene.draws[i];
@@ -328,6 +376,7 @@ int main(int argc, char** argv) {
       }
       const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
       if (d.kind == "mrt") gl.DrawBuffers(2, both);
+      if (d.window) gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
       if (d.kind == "fixed") {
         gl.UseProgram(0);
         glColor4fv(d.colour);
@@ -344,6 +393,7 @@ int main(int argc, char** argv) {
         gl.BindVertexArray(0);
       }
       if (d.kind == "mrt") gl.DrawBuffers(1, both);
+      if (d.window) gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
       if (d.stencil || d.stencil_always) glDisable(GL_STENCIL_TEST);
       if (d.msaa) {  // resolve into the frame's target
         gl.BindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo);

@@ -9,7 +9,8 @@
 //   kError: text (a program that fails to link after rewriting, a GL failure)
 //   kEnd:   EndChunk when the retracer exits or the range is done (with the record
 //           buffer's capacity: a draw that overflowed a buffer sized by
-//           OITSIM_RECORDS_PER_PIXEL is captured again with a larger one)
+//           OITSIM_RECORDS_PER_PIXEL is captured again with a larger one; and the
+//           GL objects deleted while the stream was open, by kind)
 //   kVerify: FrameChunk, then width x height RGBA float (GL's blend of the frame's
 //           transparent draws into an RGBA32F target cleared to 0) and width x height
 //           u32 (fragments per pixel counted by the same second drawing), before kFrame
@@ -22,7 +23,12 @@
 
 namespace oit::capture::stream {
 
-inline constexpr char kMagic[8] = {'O', 'I', 'T', 'S', 'I', 'P', 'S', '1'};
+// The stream's version is the magic's last character. 2: EndChunk::deleted.
+// Reader and interposer come from one build; a stream of another version
+// (an interposer from another build, --interposer) is refused, naming both.
+inline constexpr uint32_t kVersion = 2;
+inline constexpr char kMagic[8] = {'O', 'I', 'T', 'S', 'I', 'P', 'S', char('0' + kVersion)};
+inline constexpr unsigned kMagicPrefix = 7;  // "OITSIPS": the same in every version
 
 struct StreamHeader {
   char magic[8];
@@ -118,11 +124,22 @@ struct FrameChunk {
   uint32_t pad;
 };
 
+// GL objects the recorder tracks, as it counts their deletion (EndChunk::deleted).
+enum DeletedKind : uint32_t {
+  kDeletedProgram = 0,       // an application's program the recorder knew (rewritten or refused),
+                             // deleted with glDeleteProgram / glDeleteObjectARB
+  kDeletedVerifyTexture,     // the recorder's own --verify colour texture, replaced at a new frame size
+  kDeletedVerifyRenderbuffer,  // its --verify depth renderbuffer, replaced for another depth format or size
+  kDeletedKindCount
+};
+
 struct EndChunk {
   uint32_t frames_seen;   // swaps replayed before the retracer stopped
   uint32_t range_done;    // 1 when the last frame of the range was completed
   uint64_t record_capacity;  // records the record buffer held (0: no draw was recorded)
   uint64_t record_limit;     // records the largest shader storage block holds (0: not asked)
+  uint32_t deleted[kDeletedKindCount];  // objects deleted while the stream was open, by DeletedKind
+  uint32_t pad;
 };
 
 // One record as the injected fragment code stores it (std430): 32 bytes.
@@ -136,5 +153,6 @@ struct GpuRecord {
 static_assert(sizeof(GpuRecord) == 32);
 static_assert(sizeof(DrawState) == 18);
 static_assert(sizeof(DrawChunk) == 112);  // 32 + 16 + 18 + 40, padded to 8
+static_assert(sizeof(EndChunk) == 40);    // 8 + 16 + 3 x 4 + 4
 
 }  // namespace oit::capture::stream

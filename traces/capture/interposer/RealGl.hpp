@@ -57,6 +57,7 @@ void* realProc(const char* name);
   X(PFNGLGETSTRINGPROC, glGetString)                                             \
   X(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)                           \
   X(PFNGLISENABLEDPROC, glIsEnabled)                                             \
+  X(PFNGLISTEXTUREPROC, glIsTexture)                                             \
   X(PFNGLLINKPROGRAMPROC, glLinkProgram)                                         \
   X(PFNGLMAPBUFFERRANGEPROC, glMapBufferRange)                                   \
   X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                                     \

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 
 #include "traces/capture/interposer/BlendClass.hpp"
 
@@ -59,7 +60,8 @@ void Recorder::write(uint32_t tag, const void* payload, uint32_t bytes, const vo
 void Recorder::finishStream(bool range_done) {
   if (!active_ || ended_) return;
   ended_ = true;
-  const EndChunk e{frame_, range_done ? 1u : 0u, capacity_, limit_};
+  EndChunk e{frame_, range_done ? 1u : 0u, capacity_, limit_, {}, 0};
+  std::copy(std::begin(deleted_), std::end(deleted_), std::begin(e.deleted));
   write(kEnd, &e, sizeof e);
   std::fclose(out_);
   out_ = nullptr;
@@ -89,7 +91,7 @@ void Recorder::ensureGl() {
 // ---------------------------------------------------------------- programs
 
 void Recorder::forgetProgram(GLuint program) {
-  if (active_) programs_.erase(program);
+  if (active_ && programs_.erase(program)) ++deleted_[kDeletedProgram];
 }
 
 // ---------------------------------------------------------------- draws

@@ -92,6 +92,10 @@ class Recorder {
   void enterVerify(Pending& p);
   void leaveVerify(Pending& p);
   void ensureVerifyTarget();
+  // Stops the capture when the verify colour texture is no longer the one the
+  // recorder made: deleted (or its name taken by another texture) by a call the
+  // interposer does not see, so the check drawing has no target of its own.
+  void checkVerifyTarget(const std::string& when);
   void copyDepth(GLint app_fb);
   void writeVerify();
   SavedBinding bindStorage(GLuint index, GLuint buffer);
@@ -120,6 +124,7 @@ class Recorder {
   GLenum verify_depth_format_ = 0;
   uint32_t frame_w_ = 0, frame_h_ = 0, verify_w_ = 0, verify_h_ = 0;
   bool verify_used_ = false;  // a verify drawing happened in this frame (target cleared)
+  uint32_t deleted_[stream::kDeletedKindCount] = {};  // EndChunk::deleted
 };
 
 }  // namespace oit::capture::interposer

@@ -5,6 +5,7 @@
 // injected code counting fragments per pixel and recording them (kCheckDraw). At
 // the swap, the target and the counts go into the stream (kVerify).
 #include <algorithm>
+#include <string>
 #include <vector>
 
 #include "traces/capture/interposer/Recorder.hpp"
@@ -29,8 +30,13 @@ void Recorder::ensureVerifyTarget() {
   }
   // A new texture of the new size (immutable storage cannot be resized); the old
   // one is deleted (still attached to verify_fb_, which is not bound: GL frees it
-  // when the new texture replaces it there).
-  if (verify_colour_) g.glDeleteTextures(1, &verify_colour_);
+  // when the new texture replaces it there), once it is known to be still ours: a
+  // name the application deleted and GL gave to one of its own textures must not go.
+  if (verify_colour_) {
+    checkVerifyTarget("found when the frame's size changed");
+    g.glDeleteTextures(1, &verify_colour_);
+    ++deleted_[kDeletedVerifyTexture];
+  }
   g.glGenTextures(1, &verify_colour_);
   g.glBindTexture(GL_TEXTURE_2D, verify_colour_);
   g.glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, static_cast<GLsizei>(frame_w_), static_cast<GLsizei>(frame_h_));
@@ -93,7 +99,10 @@ void Recorder::copyDepth(GLint app_fb) {
     g.glGetIntegerv(GL_RENDERBUFFER_BINDING, &saved_rb);
     // The old renderbuffer (another size or format) goes: verify_fb_ is bound, so
     // deleting it also detaches it there.
-    if (verify_depth_) g.glDeleteRenderbuffers(1, &verify_depth_);
+    if (verify_depth_) {
+      g.glDeleteRenderbuffers(1, &verify_depth_);
+      ++deleted_[kDeletedVerifyRenderbuffer];
+    }
     g.glGenRenderbuffers(1, &verify_depth_);
     g.glBindRenderbuffer(GL_RENDERBUFFER, verify_depth_);
     g.glRenderbufferStorage(GL_RENDERBUFFER, format, static_cast<GLsizei>(verify_w_), static_cast<GLsizei>(verify_h_));
@@ -112,9 +121,26 @@ void Recorder::copyDepth(GLint app_fb) {
   g.glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(saved_read));
 }
 
+void Recorder::checkVerifyTarget(const std::string& when) {
+  RealGl& g = gl();
+  bool ours = g.glIsTexture(verify_colour_);
+  if (ours && g.glGetTextureLevelParameteriv) {  // a name GL gave again: not our RGBA32F of the frame's size
+    GLint format = 0, w = 0, h = 0;
+    g.glGetTextureLevelParameteriv(verify_colour_, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);
+    g.glGetTextureLevelParameteriv(verify_colour_, 0, GL_TEXTURE_WIDTH, &w);
+    g.glGetTextureLevelParameteriv(verify_colour_, 0, GL_TEXTURE_HEIGHT, &h);
+    ours = format == GL_RGBA32F && w == static_cast<GLint>(verify_w_) && h == static_cast<GLint>(verify_h_);
+  }
+  if (!ours)
+    fail("frame " + std::to_string(frame_) + ": the interposer's --verify colour texture (GL name " + std::to_string(verify_colour_) + ") was deleted " +
+         "by a call the interposer does not see (" + when + "; the trace deletes a texture name it never created, " +
+         "which glretrace passes on unchanged): --verify cannot check the frame; capture it without --verify");
+}
+
 void Recorder::enterVerify(Pending& p) {
   RealGl& g = gl();
   ensureVerifyTarget();
+  checkVerifyTarget("found at draw " + std::to_string(p.chunk.index) + "'s check drawing");
   g.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &p.saved_draw_fb);
   g.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &p.saved_read_fb);
   if (!verify_used_) {
@@ -178,6 +204,7 @@ void Recorder::writeVerify() {
   std::vector<float> rgba(pixels * 4, 0.0f);
   std::vector<uint32_t> counts(pixels, 0);
   if (verify_used_ && verify_w_ == frame_w_ && verify_h_ == frame_h_) {
+    checkVerifyTarget("found at the frame's end");
     g.glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
     GLint saved_read = 0, saved_pack = 0, align = 4, row = 0, skip_rows = 0, skip_pixels = 0;
     g.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &saved_read);
