@@ -61,8 +61,9 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
     refresh_period = ticks(cfg.trefi_ns * cycles_per_ns);
     refresh_rfc = ticks(cfg.trfc_ns * cycles_per_ns);
     for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);
-    // (refresh_period - refresh_rfc - trcd - cl) / burst when the bursts follow each other on the bus
-    max_run_bursts = (refresh_period - refresh_rfc - trcd - cl - burst) / ccd_l + 1;  // >= 1: refreshProblem
+    // The first burst and then one per ccd_l (the bursts back to back: (room) / burst).
+    const uint64_t room = refresh_period - refresh_rfc - trcd - cl;  // >= one burst: refreshProblem
+    max_run_bursts = room >= burst ? (room - burst) / ccd_l + 1 : 1;
   }
 }
 

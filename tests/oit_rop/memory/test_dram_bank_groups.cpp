@@ -114,6 +114,19 @@ TEST(DramBankGroups, RowHitStreamToOneGroupIsPacedByTccdL) {
   EXPECT_EQ(run.stats().channel_busy[0], 128 * kBurst);
 }
 
+// With refresh a run is placed whole between two windows: it may hold the
+// first burst and then one per tCCD_L in the room a window leaves (tREFI 1000
+// ns, tRFC 100, round: 1000 - 100 - tRCD - CL = 878 cycles): (878 - 4) / 6 + 1
+// = 146 bursts with tCCD_L 6, 878 / 4 = 219 back to back.
+TEST(DramBankGroups, ARunBetweenRefreshesHoldsFewerBurstsTccdLApart) {
+  DramConfig c = grouped(6);
+  c.trefi_ns = 1000;
+  c.trfc_ns = 100;
+  EXPECT_EQ(DramTimings(c, kRoundMhz).max_run_bursts, 146u);
+  c.tccd_l = 0;
+  EXPECT_EQ(DramTimings(c, kRoundMhz).max_run_bursts, 219u);
+}
+
 // tCCD_S longer than a burst (6 against 4) spaces every column command on the
 // channel, groups or not: 128 reads over banks 0-3 end at 62 + 6 x 127 + 4.
 TEST(DramBankGroups, TccdSLongerThanABurstSpacesEveryBurst) {
