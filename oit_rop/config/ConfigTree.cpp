@@ -405,6 +405,7 @@ void ConfigTree::validate() const {
     if (!problem.empty()) errs.push_back(problem);
   }
   if (const std::string problem = DramTimings::activateProblem(c.dram); !problem.empty()) errs.push_back(problem);
+  for (const std::string& problem : DramTimings::bankGroupProblems(c.dram)) errs.push_back(problem);
   if (c.alu.fp32_rate > c.alu.fp16_rate)
     errs.push_back(fmt::format("alu.fp32_rate ({}) > alu.fp16_rate ({}): wider rows cannot blend faster",
                                c.alu.fp32_rate, c.alu.fp16_rate));

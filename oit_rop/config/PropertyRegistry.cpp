@@ -248,6 +248,23 @@ const std::vector<Property>& registry() {
       integer("dram.trtw", &R::dram, &DramConfig::trtw, 0, 255, "tCK",
               "read-to-write turnaround: idle data bus between read data and the next write data"),
       integer("dram.banks", &R::dram, &DramConfig::banks, 1, 256, "", "banks per channel"),
+      integer("dram.bank_groups", &R::dram, &DramConfig::bank_groups, 1, 64, "",
+              "bank groups per channel (GDDR5/GDDR6: 4; 1 = none, as DDR3): a power of two dividing dram.banks; "
+              "group = bank mod bank_groups, after dram.bank_hash",
+              true),
+      integer("dram.tccd_s", &R::dram, &DramConfig::tccd_s, 0, 255, "tCK",
+              "column command to column command on the channel, other bank groups (0 = the burst's bus time, as "
+              "in the presets: tCCD_S = BL / data beats per tCK)"),
+      integer("dram.tccd_l", &R::dram, &DramConfig::tccd_l, 0, 255, "tCK",
+              "column to column in one bank group: a row-hit stream to one group moves a burst per tCCD_L "
+              "(0 = no distinction; else at least dram.tccd_s; needs dram.bank_groups > 1)"),
+      integer("dram.trrd_l", &R::dram, &DramConfig::trrd_l, 0, 255, "tCK",
+              "activate to activate in one bank group; dram.trrd holds between groups (0 = no distinction; else "
+              "at least dram.trrd; needs dram.bank_groups > 1)"),
+      integer("dram.twtr_l", &R::dram, &DramConfig::twtr_l, 0, 255, "tCK",
+              "write-to-read turnaround in one bank group: end of a group's write data to a read command to the "
+              "group; dram.twtr holds for the channel (0 = no distinction; else at least dram.twtr; needs "
+              "dram.bank_groups > 1)"),
       integer("dram.row_bytes", &R::dram, &DramConfig::row_bytes, 64, 1u << 20, "bytes",
               "row-buffer size per bank (across the channel's chips)", true),
       integer("dram.burst_bytes", &R::dram, &DramConfig::burst_bytes, 8, 4096, "bytes",

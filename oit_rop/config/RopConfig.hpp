@@ -133,6 +133,15 @@ struct DramConfig {
   unsigned tfaw = 0;                      // at most four activates in any window this long
   unsigned twtr = 6;                      // end of write data to a read command, DRAM clocks
   unsigned trtw = 2;                      // idle data bus from read data to write data, DRAM clocks
+  // Bank groups (GDDR5, GDDR6; MEMORY.md "Bank groups"): the channel's banks in
+  // bank_groups groups (1 = none, as DDR3; group = bank mod bank_groups after
+  // dram.bank_hash). The _L timings hold inside a group, the _S ones (tccd_s,
+  // trrd, twtr) between groups; DRAM clocks, 0 = no distinction.
+  unsigned bank_groups = 1;
+  unsigned tccd_s = 0;  // column command to column command, any bank (0: the burst's bus time)
+  unsigned tccd_l = 0;  // column to column in one bank group
+  unsigned trrd_l = 0;  // activate to activate in one bank group (dram.trrd: other groups)
+  unsigned twtr_l = 0;  // end of write data to a read command in the same bank group (dram.twtr: the channel)
   unsigned banks = 8;
   unsigned row_bytes = 8192;        // row-buffer size per bank
   unsigned burst_bytes = 64;        // access granularity

@@ -10,6 +10,7 @@
 // fourth-latest + tFAW), O(1). Time is in DRAM ticks (DramTimings).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -26,29 +27,45 @@ class DramActivateWindow {
   // full (never above the limits, possibly later than needed).
   static constexpr unsigned kKeep = 64;
 
-  DramActivateWindow(uint64_t trrd, uint64_t tfaw) : trrd_(trrd), tfaw_(tfaw) {}
-  bool limited() const { return trrd_ != 0 || tfaw_ != 0; }
-  // The earliest tick >= t at which an activate keeps tRRD to every
-  // remembered activate and leaves no tFAW window with five.
-  uint64_t earliest(uint64_t t) const {
+  // trrd_l: activate to activate in one bank group (MEMORY.md "Bank groups"),
+  // at least trrd; trrd between groups. trrd_l = trrd (or 0): no distinction,
+  // the groups are not looked at.
+  DramActivateWindow(uint64_t trrd, uint64_t tfaw, uint64_t trrd_l = 0)
+      : trrd_(trrd), tfaw_(tfaw), trrd_l_(std::max(trrd, trrd_l)), grouped_(trrd_l_ > trrd_) {}
+  bool limited() const { return trrd_l_ != 0 || tfaw_ != 0; }
+  // The earliest tick >= t at which an activate to bank group `group` keeps
+  // tRRD (tRRD_L to the same group's) to every remembered activate and leaves
+  // no tFAW window with five.
+  uint64_t earliest(uint64_t t, unsigned group = 0) const {
     if (n_ == 0) return t;
     const uint64_t last = at_[n_ - 1];
     if (t >= last) {
       uint64_t c = t;
       if (trrd_ && c < last + trrd_) c = last + trrd_;
+      if (grouped_) c = sameGroupAfter(c, group);
       if (tfaw_ && n_ >= 4 && c < at_[n_ - 4] + tfaw_) c = at_[n_ - 4] + tfaw_;
       return c;
     }
-    return earliestAmong(t);
+    return earliestAmong(t, group);
   }
-  // Records an activate at tick t (placed by earliest()).
-  void record(uint64_t t);
+  // Records an activate at tick t to bank group `group` (placed by earliest()).
+  void record(uint64_t t, unsigned group = 0);
   unsigned size() const { return n_; }
 
  private:
-  uint64_t earliestAmong(uint64_t t) const;  // t before the latest activate
-  uint64_t trrd_, tfaw_;
+  uint64_t earliestAmong(uint64_t t, unsigned group) const;  // t before the latest activate
+  // c moved past tRRD_L after the latest activates of `group` (c at or after every one kept).
+  uint64_t sameGroupAfter(uint64_t c, unsigned group) const {
+    for (unsigned j = n_; j-- > 0 && at_[j] + trrd_l_ > c;)
+      if (group_[j] == group) return at_[j] + trrd_l_;  // the group's latest: the others are earlier
+    return c;
+  }
+  // The least spacing from activate j to one in `group`.
+  uint64_t spacing(unsigned j, unsigned group) const { return grouped_ && group_[j] == group ? trrd_l_ : trrd_; }
+  uint64_t trrd_, tfaw_, trrd_l_;
+  bool grouped_;
   std::array<uint64_t, kKeep> at_{};  // ascending
+  std::array<uint8_t, kKeep> group_{};  // bank group of each (grouped_ only)
   unsigned n_ = 0;
 };
 

@@ -41,18 +41,29 @@ DramTimings::DramTimings(const DramConfig& cfg, double core_mhz) {
   }
   trrd = tck(cfg.trrd);
   tfaw = tck(cfg.tfaw);
+  {
+    const std::vector<std::string> problems = bankGroupProblems(cfg);
+    requireDramConfig(problems.empty(), problems.empty() ? "" : problems.front().c_str());
+  }
+  bank_groups = cfg.bank_groups;
+  trrd_l = std::max(trrd, tck(cfg.trrd_l));
+  twtr_l = std::max(twtr, tck(cfg.twtr_l));
   const double burst_cycles = cfg.burst_bytes / bytes_per_cycle;
   // (A non-finite or huge value would not convert to ticks: channel_gbps or core_mhz out of range.)
   requireDramConfig(burst_cycles < 1e12, "channel_gbps too low for core_mhz: one burst would take over 10^12 core cycles");
   burst = ticks(burst_cycles);
   requireDramConfig(burst >= 1, "channel_gbps too high for core_mhz: one burst would take under 2^-16 core cycles");
+  ccd_s = std::max(burst, tck(cfg.tccd_s));
+  ccd_l = std::max(ccd_s, tck(cfg.tccd_l));
   if (cfg.trefi_ns > 0) {
     const std::string problem = refreshProblem(cfg, core_mhz);
     requireDramConfig(problem.empty(), problem.c_str());
     refresh_period = ticks(cfg.trefi_ns * cycles_per_ns);
     refresh_rfc = ticks(cfg.trfc_ns * cycles_per_ns);
     for (unsigned c = 0; c < cfg.channels; ++c) refresh_off.push_back(refresh_period * c / cfg.channels);
-    max_run_bursts = (refresh_period - refresh_rfc - trcd - cl) / burst;  // >= 1: refreshProblem
+    // The first burst and then one per ccd_l (the bursts back to back: (room) / burst).
+    const uint64_t room = refresh_period - refresh_rfc - trcd - cl;  // >= one burst: refreshProblem
+    max_run_bursts = room >= burst ? (room - burst) / ccd_l + 1 : 1;
   }
 }
 
@@ -62,6 +73,30 @@ std::string DramTimings::activateProblem(const DramConfig& cfg) {
       "dram.tfaw ({} tCK) is below 4 x dram.trrd ({} tCK): four activates tRRD apart already span {} tCK, so the "
       "window could never bind (JEDEC parts have tFAW >= 4 tRRD); set dram.tfaw to 0 (no window) or at least {}",
       cfg.tfaw, cfg.trrd, 4 * uint64_t(cfg.trrd), 4 * uint64_t(cfg.trrd));
+}
+
+std::vector<std::string> DramTimings::bankGroupProblems(const DramConfig& cfg) {
+  std::vector<std::string> p;
+  const unsigned g = cfg.bank_groups;
+  if (g == 0 || (g & (g - 1)) != 0 || cfg.banks % g != 0)
+    p.push_back(fmt::format("dram.bank_groups ({}) must be a power of two dividing dram.banks ({}): each group "
+                            "holds the same number of banks",
+                            g, cfg.banks));
+  const auto longer = [&](const char* l_name, unsigned l, const char* s_name, unsigned s) {
+    if (l == 0) return;
+    if (g <= 1)
+      p.push_back(fmt::format("dram.{} ({} tCK) needs dram.bank_groups > 1: without bank groups every bank "
+                              "keeps dram.{} ({} tCK); set dram.{} to 0 or dram.bank_groups to the part's groups",
+                              l_name, l, s_name, s, l_name));
+    else if (l < s)
+      p.push_back(fmt::format("dram.{} ({} tCK) is below dram.{} ({} tCK): inside a bank group the spacing is at "
+                              "least the one between groups; set dram.{} to 0 (no distinction) or at least {}",
+                              l_name, l, s_name, s, l_name, s));
+  };
+  longer("tccd_l", cfg.tccd_l, "tccd_s", cfg.tccd_s);
+  longer("trrd_l", cfg.trrd_l, "trrd", cfg.trrd);
+  longer("twtr_l", cfg.twtr_l, "twtr", cfg.twtr);
+  return p;
 }
 
 std::string DramTimings::refreshProblem(const DramConfig& cfg, double core_mhz) {

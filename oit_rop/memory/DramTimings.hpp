@@ -37,6 +37,19 @@ struct DramTimings {
   uint64_t ctrl = 0, cl = 0, trcd = 0, trp = 0, tras = 0, burst = 0;
   uint64_t twtr = 0, trtw = 0;  // write-to-read (to the read command), read-to-write (idle bus)
   uint64_t trrd = 0, tfaw = 0;  // activate to activate (other bank), four-activate window; 0 = none
+  // Bank groups (dram.bank_groups > 1; MEMORY.md "Bank groups"): inside a
+  // group activates are trrd_l apart, column commands tccd_l, a read waits
+  // twtr_l after the group's write data (each at least its _S value: trrd,
+  // tccd_s, twtr; equal when the configuration makes no distinction).
+  unsigned bank_groups = 1;
+  uint64_t trrd_l = 0, twtr_l = 0;
+  // Data starts on one channel at least `ccd_s` apart (max(burst, tCCD_S)),
+  // in one bank group `ccd_l` apart (max(ccd_s, tCCD_L)); a run's bursts
+  // (one bank) follow each other every ccd_l. Without bank groups and
+  // tCCD_S both are the burst: the bus alone spaces the data.
+  uint64_t ccd_s = 0, ccd_l = 0;
+  // The data span of a run of n bursts (from its first burst's start to its last one's end).
+  uint64_t runSpan(uint64_t n) const { return (n - 1) * ccd_l + burst; }
 
   // Refresh (dram.trefi_ns > 0): channel c refreshes all its banks in the
   // windows [w, w + rfc) at w = off_c + k * period, k >= 1, off_c = c * period /
@@ -68,6 +81,10 @@ struct DramTimings {
   // 4 x tRRD could never bind (four activates tRRD apart already span it), as
   // in no JEDEC part; it is refused as a likely mistake (0 turns it off).
   static std::string activateProblem(const DramConfig& cfg);
+  // The bank-group rules broken (empty: none), one line each naming the
+  // parameter: dram.bank_groups a power of two dividing dram.banks; an _L
+  // timing 0 or at least its _S value, and only with bank_groups > 1.
+  static std::vector<std::string> bankGroupProblems(const DramConfig& cfg);
 };
 
 }  // namespace oit::rop

@@ -63,6 +63,10 @@ double MemorySystem::tfawCycles() const { return DramTimings::cycles(t_.tfaw); }
 double MemorySystem::burstCycles() const { return DramTimings::cycles(t_.burst); }
 double MemorySystem::twtrCycles() const { return DramTimings::cycles(t_.twtr); }
 double MemorySystem::trtwCycles() const { return DramTimings::cycles(t_.trtw); }
+double MemorySystem::ccdSCycles() const { return DramTimings::cycles(t_.ccd_s); }
+double MemorySystem::ccdLCycles() const { return DramTimings::cycles(t_.ccd_l); }
+double MemorySystem::trrdLCycles() const { return DramTimings::cycles(t_.trrd_l); }
+double MemorySystem::twtrLCycles() const { return DramTimings::cycles(t_.twtr_l); }
 
 const MemoryStats& MemorySystem::stats() const { return stats_; }
 
@@ -365,8 +369,27 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   const bool open_row = cfg_.open_row;
   // Turnarounds: a read command waits tWTR after the last write data; write
   // data leaves tRTW of idle bus after the last read data.
-  const uint64_t bus_floor = Write ? std::max(c.bus_free, c.last_read_end + t_.trtw) : c.bus_free;
-  const uint64_t column_floor = Write ? 0 : c.last_write_end + t_.twtr;
+  uint64_t bus_floor = Write ? std::max(c.bus_free, c.last_read_end + t_.trtw) : c.bus_free;
+  uint64_t column_floor = Write ? 0 : c.last_write_end + t_.twtr;
+  // Column spacing (MEMORY.md "Bank groups"): data starts tCCD_S apart on the
+  // channel (the bus alone when tCCD_S is at most a burst), tCCD_L apart in
+  // the run's bank group (its bursts too: one bank), a read tWTR_L after its
+  // group's write data. Without bank groups and tCCD_S none of it applies.
+  const uint64_t ccd_extra = t_.ccd_s - burst;  // tCCD_S beyond the burst
+  if (ccd_extra && c.booked) bus_floor = std::max(bus_floor, c.bus_free + ccd_extra);
+  const unsigned group = t_.bank_groups > 1 ? bank_no & (t_.bank_groups - 1) : 0;
+  uint64_t group_floor = 0;         // the earliest data start the run's bank group allows
+  uint64_t group_column_floor = 0;  // a read's column command: tWTR_L after the group's write data
+  if (t_.bank_groups > 1) {
+    // (Only where the group's spacing is longer than the channel's: else the
+    // bus and the channel's tWTR hold it already.)
+    if (t_.ccd_l > t_.ccd_s) group_floor = c.group_next[group];
+    if (!Write && t_.twtr_l > t_.twtr && c.group_write_end[group])
+      group_column_floor = c.group_write_end[group] + t_.twtr_l;
+    column_floor = std::max(column_floor, group_column_floor);
+  }
+  const uint64_t step = t_.ccd_l;         // between the run's bursts (one bank, one group)
+  const uint64_t span = t_.runSpan(n);    // its data, first start to last end
   // The run's first burst hits or opens the row (closed page: activates it,
   // the bank being precharged); the others hit it and their column command
   // issues at the same tick, so each waits only for the bus, i.e. the
@@ -382,7 +405,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   uint64_t hold = 0;  // what the channel's activate limits held it back by
   bool after_data = false;  // its first command waited for the bank's last data
   uint64_t xfer, run_hits;
-  const uint64_t len = n * burst;
+  const uint64_t len = n * burst;  // the bus time its data takes
   bool refreshed = false;  // a refresh closed the bank's row
   size_t gap = 0;
   bool in_gap = false;  // the run's data goes into idle bus time before the latest booking
@@ -423,7 +446,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
         }
         // The channel's activate limits (tRRD, tFAW) may hold the activate
         // back: the bank waits (its column command is later).
-        act = c.activates.earliest(start);
+        act = c.activates.earliest(start, group);
         hold = act - start;
         start = act;
         b.open_row = row;
@@ -435,30 +458,39 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
       run_hits = n - 1;
       const uint64_t bank_allows = std::max(earliest, b.act_ready);
       after_data = b.act_ready > earliest && b.last_end > b.act + tras;  // act_ready = last_end + tRP
-      act = c.activates.earliest(bank_allows);
+      act = c.activates.earliest(bank_allows, group);
       hold = act - bank_allows;
       column = act + trcd;
       first_cmd = act;
     }
-    xfer = std::max(std::max(column, column_floor) + cl, bus_floor);  // the first burst's bus start
-    if (tries == 0 && !refreshed) unrefreshed = {arrive, column, xfer, hold, after_data};  // where it would go without refresh
+    xfer = std::max(std::max(std::max(column, column_floor) + cl, bus_floor), group_floor);  // the first burst's bus start
+    // The column command as the bank and its group allow it (a tCCD_L wait is the bank's side).
+    const uint64_t bank_column = group_floor > column + cl ? group_floor - cl : column;
+    if (tries == 0 && !refreshed) unrefreshed = {arrive, bank_column, xfer, hold, after_data};  // where it would go without refresh
     // A read the bus would delay may take a gap the bus left idle before its
     // latest booking (FR-FCFS within the window, or any scheduler for a read
     // that arrived before the one that left the gap), never moving a booking.
     // Its bank timing is the same; with refresh only when no window lies
     // between its first command and its data's end.
-    if (!Write && !refreshed && column + cl < xfer && c.gaps.latestEnd() >= column + cl + len) {
+    // With bank groups no earlier than the group allows (after every burst
+    // of the group booked so far: a gap before one of them is not looked
+    // at), with tCCD_S beyond the burst that much idle bus on either side.
+    // (The channel's tWTR: the gap's own turnaround margins.)
+    const uint64_t gap_from = std::max(std::max(column, group_column_floor) + cl, group_floor);
+    if (!Write && !refreshed && gap_from < xfer && c.gaps.latestEnd() >= gap_from + span) {
       const DramBusGaps::Asker asker{arrive, c.booked, window_};
-      const uint64_t start = c.gaps.find(asker, column + cl, len, t_.twtr + cl, t_.trtw, gap);
+      const uint64_t found = c.gaps.find(asker, gap_from - std::min(gap_from, ccd_extra), span + 2 * ccd_extra,
+                                         t_.twtr + cl, t_.trtw, gap);
+      const uint64_t start = found == DramBusGaps::kNone ? found : found + ccd_extra;
       if (start != DramBusGaps::kNone && start < xfer &&
-          (!refresh_period || !t_.refreshOverlapEnd(ch, first_cmd, start + len))) {
+          (!refresh_period || !t_.refreshOverlapEnd(ch, first_cmd, start + span))) {
         xfer = start;
         in_gap = true;
         break;
       }
     }
     if (!refresh_period) break;
-    const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, xfer + len);
+    const uint64_t after = t_.refreshOverlapEnd(ch, first_cmd, xfer + span);
     if (!after) break;
     earliest = after;
     refreshed = true;
@@ -468,7 +500,8 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   // moved it by, the rest as where the run would have gone without it; a
   // run that met a refresh at once (arriving in one, or to a row a refresh
   // closed) from after the refresh, the wait before it the refresh's.
-  RunPlace place{earliest, column, xfer, hold, after_data};
+  const uint64_t bank_column = group_floor > column + cl ? group_floor - cl : column;
+  RunPlace place{earliest, bank_column, xfer, hold, after_data};
   if (refreshed && unrefreshed.xfer && xfer > unrefreshed.xfer) {
     place = unrefreshed;
     place.refresh_wait = xfer - unrefreshed.xfer;
@@ -480,12 +513,17 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
   }
   place.refreshed = refreshed;
   run_queue_ = queueParts(c, place, xfer, in_gap);
+  run_queue_.bank += span - len;  // its bursts tCCD_L apart in its bank group: the bank's side
   hits_ += run_hits;
   misses_ += n - run_hits;
-  if (run_hits < n) c.activates.record(act);  // the run opened its row
-  const uint64_t end = xfer + len;
+  if (run_hits < n) c.activates.record(act, group);  // the run opened its row
+  const uint64_t end = xfer + span;
+  if (t_.bank_groups > 1) {
+    c.group_next[group] = std::max(c.group_next[group], end - burst + t_.ccd_l);
+    if (Write) c.group_write_end[group] = std::max(c.group_write_end[group], end);
+  }
   if (in_gap) {
-    c.gaps.take(gap, xfer, len, burst);
+    c.gaps.take(gap, xfer, span, burst);
   } else {
     // Idle bus before this run (its bank or a turnaround held it back, or it
     // came late) is a gap a later read may take.
@@ -503,7 +541,7 @@ uint64_t MemorySystem::bookRun(unsigned ch, unsigned bank_no, uint64_t row, uint
     if (c_first >= bucket_begin_ && c_last - bucket_begin_ < sample_interval_)
       stats_.bus_bytes_per_interval[last_bucket_] += n * map_.burst.d;
     else
-      sampleBursts(xfer, n, burst);
+      sampleBursts(xfer, n, step);
   }
   bank.last_end = std::max(bank.last_end, end);
   if (!open_row) {

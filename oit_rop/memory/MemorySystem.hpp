@@ -101,12 +101,21 @@ class MemorySystem {
   double burstCycles() const;  // data-bus time of one burst
   double twtrCycles() const;   // end of write data to a read command
   double trtwCycles() const;   // idle bus between read data and write data
+  // Bank groups (MEMORY.md "Bank groups"): the spacing of data starts on the
+  // channel (max(burst, tCCD_S)) and in one group (max of that and tCCD_L),
+  // and the in-group activate and write-to-read spacings.
+  unsigned bankGroups() const { return t_.bank_groups; }
+  double ccdSCycles() const;
+  double ccdLCycles() const;
+  double trrdLCycles() const;
+  double twtrLCycles() const;
   // Write bursts waiting in channel c's queue (not yet booked on the bus).
   uint64_t pendingWriteBursts(unsigned c) const { return channels_[c].writes.pendingBursts(); }
   // Address mapping (MEMORY.md): channel, bank and row of a byte address.
   unsigned channelOf(uint64_t addr) const;
   unsigned bankOf(uint64_t addr) const;
   uint64_t rowOf(uint64_t addr) const;
+  unsigned bankGroupOf(uint64_t addr) const { return bankOf(addr) % t_.bank_groups; }
 
  private:
   Cycle sample_interval_ = 0;
@@ -142,8 +151,15 @@ class MemorySystem {
     // it waited for its bank, a turnaround, a refresh (queueParts).
     std::array<std::vector<uint64_t>, 3> idle_blocks;
     DramActivateWindow activates;
+    // Per bank group (dram.bank_groups > 1, else empty): the earliest data
+    // start tCCD_L allows after the group's latest burst, and the end of the
+    // group's latest write data (tWTR_L; 0: none yet).
+    std::vector<uint64_t> group_next, group_write_end;
     Channel(const DramConfig& c, const DramTimings& t)
-        : writes(c.write_queue, c.write_high, c.write_low), activates(t.trrd, t.tfaw) {}
+        : writes(c.write_queue, c.write_high, c.write_low),
+          activates(t.trrd, t.tfaw, t.trrd_l),
+          group_next(t.bank_groups > 1 ? t.bank_groups : 0, 0),
+          group_write_end(t.bank_groups > 1 ? t.bank_groups : 0, 0) {}
   };
 
   // access() after its checks and byte counts; Pow2 = map_.pow2.

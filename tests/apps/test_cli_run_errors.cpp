@@ -409,5 +409,22 @@ TEST_F(CliRunErrors, ActivateWindowBelowFourTrrdIsRefused) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// Bank groups: groups not dividing the banks, or an in-group timing without
+// groups, is one line naming the parameter and the rule, exit 1, nothing written.
+TEST_F(CliRunErrors, BadBankGroupsAreRefused) {
+  const std::string out = dir_->file("badbg");
+  CliResult r = runOitsim("run -q -t " + trace_ + " -o " + out + " --preset titan-x-maxwell --set dram.bank_groups=32");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset titan-x-maxwell): dram.bank_groups (32) must be a "
+                      "power of two dividing dram.banks (16): each group holds the same number of banks\n");
+  EXPECT_FALSE(fs::exists(out));
+  r = runOitsim("run -q -t " + trace_ + " -o " + out + " --set dram.tccd_l=5");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "oitsim: error: invalid configuration (preset iris-pro-5200): dram.tccd_l (5 tCK) needs "
+                      "dram.bank_groups > 1: without bank groups every bank keeps dram.tccd_s (0 tCK); set "
+                      "dram.tccd_l to 0 or dram.bank_groups to the part's groups\n");
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
 }  // namespace oit::test

@@ -79,6 +79,9 @@ RopConfig configWith(SimEngine engine, bool dram_base, const std::string& path =
   t.set("l2.ways", "16");
   t.set("l3.size_bytes", dram_base ? "0" : "256KiB");
   t.set("stats.interval_cycles", "100000");
+  // Two bank groups without longer in-group timings: the same frames as none
+  // (test_dram_bank_groups.cpp); the dram.*_l steps need them.
+  t.set("dram.bank_groups", "2");
   if (!path.empty()) t.set(path, value);
   t.validate();
   RopConfig c = t.config();
@@ -129,6 +132,9 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"dram.trtw", "6"},
       {"dram.trrd", "6"},   // the base's 5 tCK; 4 x 6 still within its tFAW of 24
       {"dram.tfaw", "32"},
+      {"dram.tccd_l", "5"},   // the base's column spacing is the 4-tCK burst
+      {"dram.trrd_l", "7"},   // the base's tRRD 5 between and inside groups
+      {"dram.twtr_l", "9"},   // the base's tWTR 6
       {"dram.trefi_ns", "3900"},
       {"dram.trfc_ns", "350"},
       {"dram.write_queue", "60"},

@@ -69,6 +69,50 @@ TEST(ConfigTree, DramActivateLimitsArePresetAndValidated) {
   EXPECT_NO_THROW(t.validate());
 }
 
+// Bank groups (MEMORY.md, "Bank groups"): the GDDR presets have 4 of 4 banks
+// and a longer in-group column spacing (tCCD_L 3 tCK; navi21 also tWTR_L 13),
+// DDR3 none. Broken rules are refused by validate(), one line each naming the
+// parameter: groups not dividing the banks, an in-group timing below its
+// between-groups value, an in-group timing without groups.
+TEST(ConfigTree, DramBankGroupsArePresetAndValidated) {
+  const DramConfig iris = ConfigTree::forPreset("iris-pro-5200").config().dram;
+  const DramConfig titan = ConfigTree::forPreset("titan-x-maxwell").config().dram;
+  const DramConfig navi = ConfigTree::forPreset("navi21").config().dram;
+  EXPECT_EQ(iris.bank_groups, 1u);
+  EXPECT_EQ(iris.tccd_l + iris.trrd_l + iris.twtr_l + iris.tccd_s, 0u);
+  EXPECT_EQ(titan.bank_groups, 4u);
+  EXPECT_EQ(titan.tccd_l, 3u);
+  EXPECT_EQ(titan.twtr_l, 0u);
+  EXPECT_EQ(navi.bank_groups, 4u);
+  EXPECT_EQ(navi.tccd_l, 3u);
+  EXPECT_EQ(navi.twtr_l, 13u);
+  ConfigTree t = ConfigTree::forPreset("navi21");
+  t.set("dram.bank_groups", "32");  // 16 banks
+  std::string e = errorOf([&] { t.validate(); });
+  EXPECT_EQ(e, "invalid configuration (preset navi21): dram.bank_groups (32) must be a power of two dividing "
+               "dram.banks (16): each group holds the same number of banks");
+  t.set("dram.bank_groups", "4");
+  t.set("dram.tccd_s", "4");
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.tccd_l (3 tCK) is below dram.tccd_s (4 tCK)"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;  // one line
+  t.set("dram.tccd_s", "0");
+  t.set("dram.trrd_l", "7");  // trrd 8
+  e = errorOf([&] { t.validate(); });
+  EXPECT_NE(e.find("dram.trrd_l (7 tCK) is below dram.trrd (8 tCK)"), std::string::npos) << e;
+  t.set("dram.trrd_l", "8");
+  EXPECT_NO_THROW(t.validate());
+  t.set("dram.bank_groups", "1");
+  e = errorOf([&] { t.validate(); });
+  // Three lines: tccd_l, trrd_l and twtr_l each need groups.
+  EXPECT_NE(e.find("dram.tccd_l (3 tCK) needs dram.bank_groups > 1"), std::string::npos) << e;
+  EXPECT_NE(e.find("dram.twtr_l (13 tCK) needs dram.bank_groups > 1"), std::string::npos) << e;
+  t.set("dram.tccd_l", "0");
+  t.set("dram.trrd_l", "0");
+  t.set("dram.twtr_l", "0");
+  EXPECT_NO_THROW(t.validate());
+}
+
 // The write queue's watermarks out of order are refused by validate(), one
 // line each naming the parameters and the rule; sizes of 0 and unknown
 // schedulers by their range.

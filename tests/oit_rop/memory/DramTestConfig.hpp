@@ -32,11 +32,14 @@ inline constexpr double kRoundMhz = 1000.0;
 // The dgpu preset the controller tests were derived on (before issue 21 made
 // `dgpu` an alias of titan-x-maxwell): titan-x-maxwell's GDDR5 controller
 // (the same timings, refresh, write queue and scheduler) on four channels at
-// 1216 MHz.
+// 1216 MHz, without its bank groups (as the figures were derived; their own
+// tests: test_dram_bank_groups.cpp).
 inline RopConfig gddr5FourChannels() {
   RopConfig c = presetConfig("titan-x-maxwell");
   c.dram.channels = 4;
   c.clock.core_mhz = 1216.0;
+  c.dram.bank_groups = 1;
+  c.dram.tccd_l = c.dram.trrd_l = c.dram.twtr_l = 0;
   return c;
 }
 inline constexpr Cycle kCtrl = 40, kCl = 11, kTrcd = 11, kTrp = 11, kBurst = 4;

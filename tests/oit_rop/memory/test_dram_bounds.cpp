@@ -71,7 +71,9 @@ void expectNearBound(double got, double bound, const std::string& what) {
 }
 
 // Row-hit stream: N reads of one burst, all in one open row. One activate,
-// then the bus streams: end = ctrl + tRCD + CL + N burst.
+// then the bus streams: end = ctrl + tRCD + CL + N burst. With bank groups
+// (dgpu) the row's bank is one group: its bursts start tCCD_L apart
+// (MEMORY.md "Bank groups"), end = ctrl + tRCD + CL + (N - 1) tCCD_L + burst.
 std::vector<Request> rowHitStream(unsigned n, unsigned row_bursts) {
   std::vector<Request> rs;
   for (unsigned i = 0; i < n; ++i) rs.push_back({uint64_t(i % row_bursts) * 64, 64, false});
@@ -84,7 +86,8 @@ TEST(DramBounds, RowHitStream) {
   EXPECT_EQ(m.stats().row_misses, 1u);
   for (const PresetDram& p : presetDrams()) {
     MemorySystem pm(p.dram, p.mhz);
-    const double bound = pm.controllerCycles() + pm.trcdCycles() + pm.clCycles() + 2000 * pm.burstCycles();
+    const double bound =
+        pm.controllerCycles() + pm.trcdCycles() + pm.clCycles() + 1999 * pm.ccdLCycles() + pm.burstCycles();
     expectNearBound(double(streamEnd(pm, rowHitStream(2000, p.dram.row_bytes / 64))), bound, p.name);
   }
 }
@@ -184,7 +187,7 @@ TEST(DramBounds, ClosedPage) {
     MemorySystem pm(p.dram, p.mhz);
     lines.clear();  // 2 KiB requests inside one row (dgpu: 4 KiB rows)
     for (unsigned i = 0; i < 200; ++i) lines.push_back({uint64_t(i % (p.dram.row_bytes / 2048)) * 2048, 2048, false});
-    const double run = pm.trcdCycles() + pm.clCycles() + 32 * pm.burstCycles();
+    const double run = pm.trcdCycles() + pm.clCycles() + 31 * pm.ccdLCycles() + pm.burstCycles();  // one bank: tCCD_L
     const double period = std::max(run, pm.trasCycles()) + pm.trpCycles();
     const double bound = pm.controllerCycles() + run + 199 * period;
     expectNearBound(double(streamEnd(pm, lines)), bound, p.name);
@@ -237,10 +240,14 @@ TEST(DramBounds, ReadWriteAlternationWithAndWithoutBatching) {
   // activate limits: with them tRRD holds the first write's activate (bank 1)
   // behind the first read's (bank 0), and FR-FCFS moves later reads into the
   // idle bus that leaves, so the one-by-one stream no longer alternates
-  // strictly (dgpu: 32,786 cycles, 0.2 % under this bound; 32,863 with fcfs).
+  // strictly (dgpu: 32,786 cycles, 0.2 % under this bound; 32,863 with fcfs);
+  // and without the dgpu's bank groups (the reads' row is one group: tCCD_L
+  // would space them; test_dram_bank_groups.cpp).
   for (const PresetDram& p : presetDrams()) {
     DramConfig d = p.dram;
     d.trrd = d.tfaw = 0;
+    d.bank_groups = 1;
+    d.tccd_l = d.trrd_l = d.twtr_l = 0;
     d.write_queue = 4096;
     d.write_high = 28;
     d.write_low = 16;
@@ -269,6 +276,8 @@ TEST(DramBounds, RefreshTakesItsShareOfTheBus) {
     RopConfig c = presetConfig(preset);
     c.dram.channels = 1;
     c.dram.bank_hash = false;
+    c.dram.bank_groups = 1;  // a one-row stream: without the dgpu's tCCD_L (test_dram_bank_groups.cpp)
+    c.dram.tccd_l = c.dram.trrd_l = c.dram.twtr_l = 0;
     ASSERT_GT(c.dram.trefi_ns, 0.0) << preset;  // on by default
     MemorySystem m(c.dram, c.clock.core_mhz);
     constexpr unsigned kN = 50000;
