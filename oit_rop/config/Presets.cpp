@@ -76,12 +76,13 @@ RopConfig titanXMaxwell() {
   c.dram.trtw = 2;  // RD->WR = CL + BL/4 + 2 - WL: 2 tCK of idle data bus
   c.dram.trrd = 9;   // 5.7 ns and 23.4 ns (Ramulator's GDDR5-7000 speed table) at tCK 0.667 ns
   c.dram.tfaw = 36;
-  // Bank groups (MEMORY.md "Bank groups"): GDDR5's 16 banks in 4 groups; column
-  // commands 3 tCK apart inside a group, 2 (one BL8 burst) between groups
-  // (Ramulator's GDDR5 speed table: nCCDL 3, nCCDS 2 = nBL at every grade); one
-  // tRRD and one tWTR there (no _L values). t32AW does not bind (MEMORY.md).
-  c.dram.bank_groups = 4;
-  c.dram.tccd_l = 3;
+  // Bank groups: GDDR5's 16 banks are 4 groups (column commands 3 tCK apart inside
+  // a group: Ramulator's GDDR5 table, nCCDL 3, nCCDS 2), but they stay off here
+  // (`dram.bank_groups` 1): the controller books a run's bursts back to back and
+  // cannot put another group's burst into the tCCD_L gaps as a real one with both
+  // in its queue does, so with them on the frames are upper estimates, 12-20 %
+  // slower (MEMORY.md "Bank groups"). `--set dram.bank_groups=4 --set
+  // dram.tccd_l=3` studies them. t32AW does not bind (MEMORY.md).
   c.dram.trefi_ns = 1900.0;  // 32 ms / 16,384 refresh commands (4 Gb GDDR5, as on the GTX 980)
   c.dram.trfc_ns = 110.0;    // no GDDR5 datasheet at hand: an 8 Gb GDDR6's 110 ns (CONFIG.md)
   c.dram.banks = 16;
@@ -137,10 +138,8 @@ RopConfig navi21() {
   // Bank groups: 4 groups of 4 banks per channel (Ramulator 2's GDDR6
   // organisations); tCCD_L 3 tCK against one BL16 burst's 2 (the GDDR5 ratio,
   // and Ramulator 2's nCCDL / nCCDS = 6 / 4), tWTR_L 13 tCK (its nWTRL - nWTRS
-  // = 2 tCK of 0.57 ns added to tWTR); its 1.35 V table has one tRRD for both.
-  c.dram.bank_groups = 4;
-  c.dram.tccd_l = 3;
-  c.dram.twtr_l = 13;
+  // = 2 tCK of 0.57 ns added to tWTR). Off here for the reason titan-x-maxwell
+  // gives; `--set dram.bank_groups=4 --set dram.tccd_l=3 --set dram.twtr_l=13`.
   c.dram.trefi_ns = 1900.0;
   c.dram.trfc_ns = 110.0;
   c.dram.banks = 16;
@@ -180,13 +179,13 @@ const std::vector<PresetEntry>& presets() {
        {OITSIM_COMMON_ESTIMATES, "input.fragments_per_clock", "lock.capacity", "cache.size_bytes", "cache.line_bytes",
         "cache.sector_bytes", "l2.ways", "l2.line_bytes", "l2.sector_bytes", "l2.hit_latency", "l2.bytes_per_clock",
         "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.twtr", "dram.trtw", "dram.trefi_ns",
-        "dram.trfc_ns", "dram.trrd", "dram.tfaw", "dram.bank_groups", "dram.tccd_l"}},
+        "dram.trfc_ns", "dram.trrd", "dram.tfaw"}},
       {"navi21", navi21,
        {OITSIM_COMMON_ESTIMATES, "partitions.count", "input.fragments_per_clock", "lock.capacity", "cache.size_bytes",
         "cache.line_bytes", "alu.blends_per_clock", "l2.size_bytes", "l2.ways", "l2.line_bytes", "l2.slices", "l2.hit_latency",
         "l2.bytes_per_clock", "l3.ways", "l3.line_bytes", "l3.slices", "l3.hit_latency", "l3.bytes_per_clock",
         "l3.victim_only", "dram.tck_ns", "dram.cl", "dram.trcd", "dram.trp", "dram.tras", "dram.banks", "dram.twtr",
-        "dram.trtw", "dram.trfc_ns", "dram.trrd", "dram.tfaw", "dram.bank_groups", "dram.tccd_l", "dram.twtr_l"}},
+        "dram.trtw", "dram.trfc_ns", "dram.trrd", "dram.tfaw"}},
   };
   return list;
 }

@@ -136,7 +136,8 @@ TEST(DramBankGroups, TccdSLongerThanABurstSpacesEveryBurst) {
   EXPECT_EQ(readAllAtZero(m, rowHitsOver({0, 1, 2, 3}, 128, c.row_bytes)), kCtrl + kTrcd + kCl + 6 * 127 + kBurst);
 }
 
-// The presets' DRAM on one channel (open rows, refresh off): a row-hit stream
+// The presets' DRAM with their parts' bank groups (4, tCCD_L 3 tCK: CONFIG.md;
+// off in the presets themselves) on one channel (open rows, refresh off): a row-hit stream
 // in one bank moves a burst per tCCD_L (titan-x-maxwell: 3 tCK x 0.667 ns at
 // 1075 MHz = 2.151 cycles against a 1.229-cycle burst; navi21: 3 tCK x 0.5 ns
 // at 2015 MHz = 3.023 against 2.015); the same reads over one bank of each
@@ -146,7 +147,9 @@ TEST(DramBankGroups, PresetsRowHitStreamsAgainstTheirBounds) {
   for (const char* preset : {"titan-x-maxwell", "navi21"}) {
     const RopConfig rc = presetConfig(preset);
     DramConfig d = rc.dram;
-    ASSERT_EQ(d.bank_groups, 4u) << preset;
+    ASSERT_EQ(d.bank_groups, 1u) << preset;
+    d.bank_groups = 4;
+    d.tccd_l = 3;
     d.channels = 1;
     d.trefi_ns = d.trfc_ns = 0;
     MemorySystem probe(d, rc.clock.core_mhz);
