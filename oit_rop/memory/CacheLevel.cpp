@@ -259,8 +259,9 @@ void CacheLevel::renumberStamps() {
   stamp_ = top + 1;
 }
 
-void CacheLevel::evict(Cycle now, size_t way) {
-  if (tag(way) == 0) return;
+Cycle CacheLevel::evict(Cycle now, size_t way) {
+  if (tag(way) == 0) return now;
+  Cycle accepted = now;
   Line& l = record(way);
   const uint64_t addr = lineOf(way) * cfg_.line_bytes;
   const Surface surf = surface(way);
@@ -269,19 +270,20 @@ void CacheLevel::evict(Cycle now, size_t way) {
     // A victim level below takes every eviction, clean or dirty.
     ++stats_.writebacks[si];
     stats_.writeback_bytes[si] += uint64_t(sectorCount(l.valid)) * sector_bytes_;
-    victim_sink_->insertVictim(now, addr, cfg_.line_bytes, sector_bytes_, l.valid, l.dirty, surf);
+    accepted = victim_sink_->insertVictim(now, addr, cfg_.line_bytes, sector_bytes_, l.valid, l.dirty, surf);
   } else if (l.dirty) {
     ++stats_.writebacks[si];
     forEachRun(l.dirty, [&](uint32_t s, uint32_t e) {  // a write per run of dirty sectors
       const uint32_t bytes = (e - s) * sector_bytes_;
       stats_.writeback_bytes[si] += bytes;
-      lower_.access(now, addr + uint64_t(s) * sector_bytes_, bytes, true, surf);
+      accepted = std::max(accepted, lower_.access(now, addr + uint64_t(s) * sector_bytes_, bytes, true, surf));
     });
   }
   l = Line{};
   tag(way) = 0;
   stamp(way) = 0;
   surface(way) = Surface::BlendArrays;
+  return accepted;
 }
 
 size_t CacheLevel::pickVictim(size_t set) const {
@@ -300,10 +302,10 @@ size_t CacheLevel::pickVictim(size_t set) const {
   return set + v;
 }
 
-size_t CacheLevel::install(Cycle now, size_t set, size_t way, uint64_t line) {
+size_t CacheLevel::install(Cycle now, size_t set, size_t way, uint64_t line, Cycle& freed) {
   const size_t set_no = set >> way_shift_;
   set_used_[set_no / 64] |= uint64_t(1) << (set_no % 64);
-  evict(now, way);
+  freed = evict(now, way);
   tag(way) = uint32_t(line + 1);
   return way;
 }
@@ -382,13 +384,19 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       const Cycle got = fetch(start + cfg_.hit_latency, line, missing, s);
       done = std::max({done, after_lookup, moved, got});
       if (!l && cfg_.victim_only) continue;
+      Cycle ready = got;
       if (!l) {
-        way = install(start, set, victim, line);
+        // The old line's write-back (or its hand-over to the victim level)
+        // must be accepted below before the fill can take its way.
+        Cycle freed;
+        way = install(start, set, victim, line, freed);
         l = &record(way);
         surface(way) = s;
+        ready = std::max(ready, freed);
+        done = std::max(done, freed);
       }
       l->valid |= missing;
-      l->ready = std::max(l->ready, got);
+      l->ready = std::max(l->ready, ready);
       touchLru(way);
       continue;
     }
@@ -401,14 +409,19 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     else ++stats_.misses[si];
     done = std::max(done, moved);  // accepted once its bytes crossed the port
     if (!l && cfg_.victim_only) {
-      // Not held: straight to the level below (a victim level allocates only victims).
-      lower_.access(start, b, uint32_t(e - b), true, s);
+      // Not held: straight to the level below (a victim level allocates only
+      // victims), accepted when the level below accepted it.
+      done = std::max(done, lower_.access(start, b, uint32_t(e - b), true, s));
       stats_.writeback_bytes[si] += e - b;
       continue;
     }
     if (!l) {
-      way = allocate(start, set, line);
+      // Accepted once the way is free too (its old line accepted below).
+      Cycle freed;
+      way = allocate(start, set, line, freed);
       l = &record(way);
+      l->ready = std::max(l->ready, freed);
+      done = std::max(done, freed);
     }
     const uint32_t partial = any & ~whole & ~l->valid;
     if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
@@ -420,9 +433,10 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
   return done;
 }
 
-void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uint32_t sector_bytes, uint32_t valid,
-                              uint32_t dirty, Surface s) {
+Cycle CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uint32_t sector_bytes, uint32_t valid,
+                               uint32_t dirty, Surface s) {
   const unsigned si = unsigned(s);
+  Cycle accepted = now;
   ++stats_.victims_in;
   // The classifier learns each line's sectors once (consecutive installs of
   // one line are one install: nothing else touches it between them).
@@ -447,18 +461,22 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
     const size_t set = setOfLine(line, slice);
     Cycle moved;
     const Cycle start = bookPort(slice, now, sector_bytes, moved);
+    accepted = std::max(accepted, moved);
     stats_.write_bytes[si] += sector_bytes;
     size_t way = find(set, line);
     if (way == kNoWay) {
       if (whole == 0) {
         // Covers no whole sector of ours: dirty bytes go on below, clean ones are dropped.
         if (is_dirty) {
-          lower_.access(start, a, sector_bytes, true, s);
+          accepted = std::max(accepted, lower_.access(start, a, sector_bytes, true, s));
           stats_.writeback_bytes[si] += sector_bytes;
         }
         continue;
       }
-      way = allocate(start, set, line);
+      Cycle freed;
+      way = allocate(start, set, line, freed);
+      accepted = std::max(accepted, freed);
+      record(way).ready = freed;  // its bytes take the way once the old line left it
       surface(way) = s;
     }
     Line* const l = &record(way);
@@ -473,13 +491,14 @@ void CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uin
       l->dirty |= whole;
       surface(way) = s;
       if (any & ~whole) {  // the rest of a partly covered sector: written through
-        lower_.access(start, a, sector_bytes, true, s);
+        accepted = std::max(accepted, lower_.access(start, a, sector_bytes, true, s));
         stats_.writeback_bytes[si] += sector_bytes;
       }
     }
     touchLru(way);
   }
   if (classes_) flush();
+  return accepted;
 }
 
 void CacheLevel::dirtyRanges(std::vector<DirtyRange>& out) const {

@@ -84,12 +84,17 @@ class CacheLevel final : public MemoryPort {
 
   // Read: the cycle the bytes are there. Write: the cycle the level accepted
   // them (posted: a write-back of the level above does not wait for its fill).
+  // A miss that allocates is neither before its victim was accepted below.
   Cycle access(Cycle now, uint64_t addr, uint32_t bytes, bool write, Surface s) override;
   // An eviction of the level above: the sectors `valid` of its line at `addr`
   // (a line of `line_bytes` bytes, `sector_bytes` each), those in `dirty`
-  // dirty (victim_only levels).
-  void insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uint32_t sector_bytes, uint32_t valid,
-                    uint32_t dirty, Surface s);
+  // dirty (victim_only levels). Returns the cycle the line was accepted: its
+  // bytes crossed this level's port, and what this level wrote below for it
+  // (its own evictions, the bytes it does not hold) was accepted there. The
+  // evicting level's way is not free before (MEMORY.md, "Shared cache
+  // levels": who waits for a write-back).
+  Cycle insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, uint32_t sector_bytes, uint32_t valid,
+                     uint32_t dirty, Surface s);
   // Every dirty sector still held (frame end), merged into runs per line.
   void dirtyRanges(std::vector<DirtyRange>& out) const;
 
@@ -188,10 +193,15 @@ class CacheLevel final : public MemoryPort {
       if (t[w] == want) return set + w;
     return kNoWay;
   }
-  // A way for `line` in its set (invalid first, else LRU), the old line evicted.
-  size_t allocate(Cycle now, size_t set, uint64_t line) { return install(now, set, pickVictim(set), line); }
+  // A way for `line` in its set (invalid first, else LRU), the old line
+  // evicted; `freed`: the cycle the way is free (below).
+  size_t allocate(Cycle now, size_t set, uint64_t line, Cycle& freed) {
+    return install(now, set, pickVictim(set), line, freed);
+  }
   size_t pickVictim(size_t set) const;  // the way allocate() would take
-  size_t install(Cycle now, size_t set, size_t way, uint64_t line);  // `line` into `way`, its old line evicted
+  // `line` into `way`, its old line evicted; `freed`: the cycle the level
+  // below accepted the old line (evict()), `now` when it left nothing to write.
+  size_t install(Cycle now, size_t set, size_t way, uint64_t line, Cycle& freed);
   // Asks the host to bring the tags and stamps of the set `line` maps to
   // into its caches (a hint: no state changes). The level above calls it
   // for its victim before its own fill, so the two host cache misses overlap.
@@ -201,7 +211,13 @@ class CacheLevel final : public MemoryPort {
     __builtin_prefetch(b, 1);
     __builtin_prefetch(b + 64, 1);
   }
-  void evict(Cycle now, size_t way);
+  // Empties `way`: its dirty sectors written below, or the whole line handed
+  // to the victim level. Returns the cycle the level below accepted them
+  // (`now` when nothing went below): the way is not free before. No
+  // write-back buffer is modelled apart from the level below's own: the DRAM
+  // controller's write queue (dram.write_queue) is the buffer between the
+  // last level and DRAM, and pushes back when full (MEMORY.md).
+  Cycle evict(Cycle now, size_t way);
   // Stamps are 32 bits: when the clock wraps, every used set's stamps are
   // renumbered 1..ways in their order (only the order inside a set matters).
   void touchLru(size_t way) {

@@ -1,7 +1,7 @@
 // Monotonicity (issue 21, "What must hold"): every resource knob one step
 // worse (fewer partitions, smaller caches, fewer ways, lower bandwidth,
 // longer latencies, coarser lock, end-of-shader release, smaller queues; the
-// DRAM controller's turnarounds, activate limits, refresh, write queue and scheduler too) on
+// DRAM controller's turnarounds, tRRD, refresh, write queue and scheduler too) on
 // three scenes; no frame may get faster by more than 0.5 % (a smaller
 // scoreboard only by cutting the ROP cache's thrashing, below). The base is
 // iris-pro-5200 with its caches scaled to the scenes (an 8 KiB ROP cache, a
@@ -131,7 +131,13 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"dram.twtr", "12"},
       {"dram.trtw", "6"},
       {"dram.trrd", "6"},   // the base's 5 tCK; 4 x 6 still within its tFAW of 24
-      {"dram.tfaw", "32"},
+      // No dram.tfaw step: on these scenes the four-activate window hardly
+      // binds (24 -> 32 tCK moved no cycle-engine frame once the l2 waits for
+      // DRAM write room, and made the approximate engine's particles over the
+      // wall 0.56 % faster, both partitions sooner; 40 and 48 tCK made frames
+      // up to 1.25 % faster: DESIGN.md, "Monotonicity of the DRAM steps").
+      // tFAW is checked against hand-derived bounds instead (test_bounds.cpp
+      // DramActivateLimitFrame, memory/test_dram_bounds.cpp).
       {"dram.tccd_l", "5"},   // the base's column spacing is the 4-tCK burst
       {"dram.trrd_l", "7"},   // the base's tRRD 5 between and inside groups
       {"dram.twtr_l", "9"},   // the base's tWTR 6
@@ -229,18 +235,19 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
       // fill's latency sets their rate), they share the DRAM, and the frame
       // ends with the later one. A DRAM step changes how their requests meet
       // on the shared banks and bus, and that moves fill latency from one
-      // partition to the other by more than the step itself costs: on the
-      // approximate engine dram.trcd 11 -> 15 on particles over the wall
-      // gave the later partition's fills 156.3 -> 151.0 cycles on average
-      // and the earlier one's 150.7 -> 154.3 (tRCD's own cost: +0.4 cycles
-      // a fill), the later partition ended 2,692 cycles sooner and the frame
-      // 0.74 % (dram.write_queue 64 -> 60: 0.96 % there, 1.07 % on
-      // particles, the same way). The cycle engine does it too on these
-      // scenes: dram.trcd 15 -> 16 on particles over the wall, -1.73 %, its
-      // later partition ending 1,669 cycles sooner and the other 326 later.
+      // partition to the other by more than the step itself costs. Since the
+      // l2 waits for DRAM write room (CacheLevel: a miss is ready no earlier
+      // than its dirty victim's acceptance) the cases on the default seed
+      // are: cycle engine, dram.trrd 5 -> 6 on particles 0.84 % faster (the
+      // earlier partition ending 765 cycles later, the later one 970
+      // sooner); approximate engine, dram.queue_depth 64 -> 8 and
+      // dram.scheduler fcfs on sweeps 0.80 % (the earlier partition 69
+      // cycles later). (Before, with the l2's write-backs held outside the
+      // write queue for free, dram.write_queue 64 -> 60 made the approximate
+      // engine's particles 1.07 % faster, and the bound here was 1.5 %.)
       // Either engine: only when some partition ended later (the DRAM's
       // service moved between them), with the DRAM bytes within 0.5 %, and by
-      // under 1.5 %.
+      // under 1 %.
       if (isDramStep(path) && faster > 0.005) {
         const auto& parts = r.stats["timing"]["per_partition"];
         const auto& base_parts = ref.stats["timing"]["per_partition"];
@@ -249,7 +256,7 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
           one_later |= parts[i]["end_cycle"].get<uint64_t>() > base_parts[i]["end_cycle"].get<uint64_t>();
         EXPECT_TRUE(one_later) << sc.name << ": " << path << " = " << value << " made every partition faster";
         EXPECT_LT(std::abs(double(dramBytes(r)) / double(dramBytes(ref)) - 1), 0.005) << sc.name << ": " << path << " = " << value;
-        EXPECT_LT(faster, 0.015) << sc.name << ": " << path << " = " << value << ": " << why(r) << " against "
+        EXPECT_LT(faster, 0.01) << sc.name << ": " << path << " = " << value << ": " << why(r) << " against "
                                  << why(ref);
         continue;
       }

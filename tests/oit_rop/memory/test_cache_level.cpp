@@ -271,35 +271,142 @@ TEST(CacheLevel, RejectsBadGeometry) {
   EXPECT_THROW(CacheLevel("l2", c, 1000, below), std::invalid_argument);
 }
 
-// DISABLED: fails today; the defect is reported, not fixed here (the DRAM
-// controller is being changed elsewhere). A posted write returns when the level
-// below accepted it (MEMORY.md, "DRAM: writes": a full write queue makes the
-// writer wait, the queue pushes back on its requesters), and the ROP cache
-// honours that: a miss that evicts a dirty line is ready no earlier than the
-// write-back's acceptance (BlendArrayCache::access). CacheLevel::evict drops the
-// acceptance its write-back returns, so behind an l2 nothing ever waits for
-// room in the DRAM's write queue: a write that waits for room is held outside
-// the queue for free, and a smaller queue only moves when write batches drain
-// (why dram.write_queue 64 -> 60 made test_monotonicity's particles frame 1.28 %
-// faster with input.seed = 8: DESIGN.md, "Monotonicity of the DRAM steps").
-// Here the level below accepts writes 5000 cycles late (its queue full) and
-// answers reads after 100: one set of two ways, A and B written (dirty, whole
-// sectors: no fetch), then C read at 300 evicts A: its write-back goes below at
-// 300 (the allocation's tick), accepted at 5300; the fill, read below after the
-// 20-cycle lookup at 320, is ready at 420, but the line's way is not free before
-// A left it: C is ready at max(420, 5300) = 5300.
-TEST(CacheLevel, DISABLED_AMissWaitsForItsDirtyVictimsAcceptanceBelow) {
-  struct SlowWrites : MemoryPort {
-    Cycle write_at = 0;
-    Cycle access(Cycle now, uint64_t, uint32_t, bool write, Surface) override {
-      if (write) write_at = now;
-      return now + (write ? 5000 : 100);
+namespace {
+// A level below that accepts writes 5000 cycles late (its write queue full)
+// and answers reads after 100; it keeps the cycle of its last write.
+struct SlowWrites : MemoryPort {
+  Cycle write_at = 0;
+  unsigned writes = 0;
+  Cycle access(Cycle now, uint64_t, uint32_t, bool write, Surface) override {
+    if (write) {
+      write_at = now;
+      ++writes;
     }
-  } below;
+    return now + (write ? 5000 : 100);
+  }
+};
+}  // namespace
+
+// A posted write returns when the level below accepted it (MEMORY.md, "DRAM:
+// writes": a full write queue makes the writer wait, it pushes back on its
+// requesters), and a way is not free before its old line left it: a miss that
+// evicts a dirty line is ready no earlier than the write-back's acceptance, as
+// in the ROP cache (BlendArrayCache::commitMiss). (Until the fix CacheLevel
+// dropped that acceptance, so behind an l2 nothing ever waited for room in the
+// DRAM's write queue: why dram.write_queue 64 -> 60 made test_monotonicity's
+// particles frame 1.28 % faster with input.seed = 8, DESIGN.md, "Monotonicity
+// of the DRAM steps".) One set of two ways, A and B written (dirty, whole
+// sectors: no fetch), then C read at 300 evicts A: its write-back goes below
+// at 300 (the allocation's tick, the port's start), accepted at 5300; the
+// fill, read below after the 20-cycle lookup at 320, is there at 420, but the
+// line's way is free only at 5300: C is ready at max(420, 5300) = 5300 (420
+// before the fix). A hit on C afterwards waits for the same way: 5300.
+TEST(CacheLevel, AMissWaitsForItsDirtyVictimsAcceptanceBelow) {
+  SlowWrites below;
   CacheLevel l2("l2", small(128, 2), 1000, below);  // one set of 2 ways
   l2.access(0, 0, 64, true, Surface::BlendArrays);     // A dirty
   l2.access(10, 64, 64, true, Surface::BlendArrays);   // B dirty
   const Cycle c = l2.access(300, 128, 64, false, Surface::BlendArrays);  // C evicts A
   ASSERT_EQ(below.write_at, 300u);
-  EXPECT_EQ(c, 5300u);  // today: 420
+  EXPECT_EQ(c, 5300u);
+  EXPECT_EQ(l2.access(400, 128, 64, false, Surface::BlendArrays), 5300u);  // hit under the way's wait
+}
+
+// The same for a write that allocates (a write-back of the level above): it
+// is accepted once its bytes crossed the port and the way it takes is free.
+// A and B written dirty at 0 and 10; D written at 300 evicts A (written below
+// at 300, accepted at 5300): D's bytes cross the port 300..304 (64 B at 16 B
+// a clock), accepted at max(304, 5300) = 5300 (304 before the fix). A write
+// that hits (B again at 400) is accepted at 404: nothing waits for room.
+TEST(CacheLevel, AWriteThatAllocatesWaitsForItsDirtyVictimsAcceptanceBelow) {
+  SlowWrites below;
+  CacheLevel l2("l2", small(128, 2), 1000, below);
+  l2.access(0, 0, 64, true, Surface::BlendArrays);
+  l2.access(10, 64, 64, true, Surface::BlendArrays);
+  EXPECT_EQ(l2.access(300, 128, 64, true, Surface::BlendArrays), 5300u);
+  EXPECT_EQ(below.writes, 1u);
+  EXPECT_EQ(l2.access(400, 64, 64, true, Surface::BlendArrays), 404u);
+}
+
+// A victim level's port is the write-back's acceptance: the l2 hands its
+// evicted line to the victim l3 through the l3 slice's port, and its way is
+// free once the l3 took the bytes. The l3 has two slices of 1 B a clock
+// (slice = line mod 2 for these lines), 20-cycle lookups; the l2 one set of
+// two ways at 16 B a clock, 20-cycle lookups; DRAM (FakeBelow) 100 cycles.
+// A (line 0, l3 slice 0) and B (line 1) written into the l2 (dirty). At 1000
+// five reads of other even lines keep the l3's slice 0 busy 1000..1320 (64
+// cycles each: another requester, as the l2's other sets' misses would). C
+// (line 3, slice 1) read from the l2 at 1000: the l2's port 1000..1004, its
+// lookup to 1020, the fill from the l3 at 1020 on slice 1 (idle): its port
+// 1020..1084, lookup to 1040, a miss (not allocated: victim-only), DRAM at
+// 1040 -> 1140, so the fill is there at max(1084, 1040, 1140) = 1140. A is the
+// l2's victim, handed to the l3 at 1000 (the l2's port start): slice 0 is free
+// from 1320, A's 64 B move 1320..1384, and the l3 installs it in an empty way
+// (no eviction of its own). C is ready at max(1140, 1384) = 1384 (1140 before
+// the fix); A is in the l3, dirty, nothing written to DRAM.
+TEST(CacheLevel, AMissWaitsForTheVictimLevelsPortToTakeItsVictim) {
+  FakeBelow dram;
+  SharedCacheConfig c3 = small(4096, 4, 64, 2);
+  c3.victim_only = true;
+  c3.bytes_per_clock = 1;
+  CacheLevel l3("l3", c3, 1000, dram);
+  CacheLevel l2("l2", small(128, 2), 1000, l3, &l3);
+  ASSERT_EQ(l3.sliceOf(0), 0u);
+  ASSERT_EQ(l3.sliceOf(3 * 64), 1u);
+  l2.access(0, 0, 64, true, Surface::BlendArrays);    // A dirty
+  l2.access(10, 64, 64, true, Surface::BlendArrays);  // B dirty
+  Cycle busy = 0;
+  for (uint64_t line = 16; line < 26; line += 2) {
+    ASSERT_EQ(l3.sliceOf(line * 64), 0u);
+    busy = std::max(busy, l3.access(1000, line * 64, 64, false, Surface::Depth));
+  }
+  // The fifth read's bytes move 1256..1320, lookup to 1276, DRAM 1276 -> 1376.
+  ASSERT_EQ(busy, 1376u);
+  EXPECT_EQ(l2.access(1000, 3 * 64, 64, false, Surface::BlendArrays), 1384u);
+  EXPECT_TRUE(l3.resident(0));
+  EXPECT_EQ(dram.bytes(true), 0u);
+}
+
+// The victim level's own eviction: the line the l3 drops to take the l2's
+// victim is written to DRAM, and the l2's way is free once DRAM accepted it.
+// The l3 holds one line (one set, one way), victim-only; DRAM (SlowWrites)
+// accepts writes 5000 cycles late, reads in 100. The l2 one set of two ways.
+// A and B written into the l2 (dirty) at 0 and 10. C read at 300: an l2 miss,
+// the fill from the l3 at 320 (the l3's port 320..324, lookup to 340, a miss:
+// DRAM at 340 -> 440); A handed to the l3 at 300 (its port 300..304, an empty
+// way): C ready at max(440, 304) = 440. D read at 1000: the fill the same way,
+// 1040 -> 1140; B (the l2's LRU) handed to the l3 at 1000 (port 1000..1004),
+// whose one way holds A, dirty: A is written to DRAM at 1000 (the l3's port
+// start), accepted at 6000. D is ready at max(1140, 1004, 6000) = 6000 (1140
+// before the fix).
+TEST(CacheLevel, AMissWaitsForTheVictimLevelsOwnEvictionBelow) {
+  SlowWrites dram;
+  SharedCacheConfig c3 = small(64, 1);
+  c3.victim_only = true;
+  CacheLevel l3("l3", c3, 1000, dram);
+  CacheLevel l2("l2", small(128, 2), 1000, l3, &l3);
+  l2.access(0, 0, 64, true, Surface::BlendArrays);    // A dirty
+  l2.access(10, 64, 64, true, Surface::BlendArrays);  // B dirty
+  EXPECT_EQ(l2.access(300, 128, 64, false, Surface::BlendArrays), 440u);
+  EXPECT_EQ(dram.writes, 0u);
+  EXPECT_EQ(l2.access(1000, 192, 64, false, Surface::BlendArrays), 6000u);
+  EXPECT_EQ(dram.writes, 1u);
+  EXPECT_EQ(dram.write_at, 1000u);
+  EXPECT_TRUE(l3.resident(64));
+  EXPECT_FALSE(l3.resident(0));
+}
+
+// A write a victim-only level does not hold goes on below and is accepted
+// when the level below accepted it. The level's port moves the 64 B 100..104
+// (16 B a clock); not held, so it is written below at 100 (the port's start),
+// accepted at 5100: the write is accepted at max(104, 5100) = 5100 (104 before
+// the fix). Nothing is allocated.
+TEST(CacheLevel, AWritePassedThroughAVictimLevelIsAcceptedWhenBelowAcceptedIt) {
+  SlowWrites dram;
+  SharedCacheConfig c = small(4096, 4);
+  c.victim_only = true;
+  CacheLevel l3("l3", c, 1000, dram);
+  EXPECT_EQ(l3.access(100, 512, 64, true, Surface::Colour), 5100u);
+  EXPECT_EQ(dram.write_at, 100u);
+  EXPECT_FALSE(l3.resident(512));
 }
