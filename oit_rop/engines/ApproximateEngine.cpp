@@ -48,6 +48,8 @@ void ApproximateEngine::run() {
   Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
   Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
   Cycle refused_to = 0;  // when the latest access the miss queue refused got its entry
+  Cycle alu_work_to = 0;  // the latest end of a blend's work (the ALU busy up to there)
+  const Cycle atomic_latency = p.cfg_.abuffer.atomic_latency;
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
   std::array<StageCycles, kStages> acc;
@@ -360,9 +362,18 @@ void ApproximateEngine::run() {
       const Cycle done = blend_start + p.alu_.latency(work);
       if (blend_start > at) {
         tl[4].addLeavingGap(acc[4], at, blend_start, StageStatus::stall(Stall::AtomicWait));
-        shares.add(RootCause::Atomics, blend_start - at);  // the A-buffer's node counter
+        // The A-buffer's node counter: its queueing (the counter's rate,
+        // shared by the partitions) delays the blend; its latency, a fixed
+        // one like the blend's own, only where no earlier blend's work
+        // overlaps it (the cycle engine's atomic_wait: the cycles where every
+        // blend in flight waits for its atomic).
+        const Cycle served = blend_start - atomic_latency;
+        const Cycle exposed_from = std::max(served, alu_work_to);
+        shares.add(RootCause::Atomics,
+                   (served > at ? served - at : 0) + (blend_start > exposed_from ? blend_start - exposed_from : 0));
       }
       tl[4].addLeavingGap(acc[4], blend_start, done, kBusy);
+      alu_work_to = std::max(alu_work_to, done);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);
