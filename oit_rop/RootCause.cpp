@@ -90,11 +90,11 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest) 
   return w;
 }
 
-WaitSplit MissWaits::freeing(Cycle frees, const WaitSplit& fallback) const {
-  const std::pair<Cycle, WaitSplit>* best = nullptr;
+const MissWait* MissWaits::freeingMiss(Cycle frees) const {
+  const MissWait* best = nullptr;
   for (size_t i = 0; i < size_; ++i)
-    if (ring_[i].first >= frees && (!best || ring_[i].first < best->first)) best = &ring_[i];
-  return best ? best->second : fallback;
+    if (ring_[i].ready >= frees && (!best || ring_[i].ready < best->ready)) best = &ring_[i];
+  return best;
 }
 
 void splitLatency(uint64_t n, Cycle from, Cycle to, const BusShareFn& bus, uint64_t& latency, uint64_t& bandwidth) {

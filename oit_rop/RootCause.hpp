@@ -93,21 +93,30 @@ WaitSplit splitWait(Cycle now, Cycle ready, const DramProbe& d, RootCause rest =
 // unloaded access). Taking the latest's charged a resolve bound by the
 // channel's activate limits (test_bounds.cpp, DramActivateLimitFrame) 16-20 %
 // dram_latency.
+struct MissWait {
+  Cycle from = 0, ready = 0;  // the miss's wait: asked at `from`, its line there at `ready`
+  WaitSplit wait;
+};
 class MissWaits {
  public:
   // Keeps the latest `n` (the miss queue's entries: the oldest in flight is among them).
   explicit MissWaits(unsigned n = 1) : ring_(std::max(1u, n)) {}
-  void add(Cycle ready, const WaitSplit& w) {
-    ring_[next_] = {ready, w};
+  void add(Cycle from, Cycle ready, const WaitSplit& w) {
+    ring_[next_] = {from, ready, w};
     next_ = next_ + 1 == ring_.size() ? 0 : next_ + 1;
     size_ = std::min<size_t>(size_ + 1, ring_.size());
   }
-  // The wait of the miss a miss queue that frees at `frees` waits for: the
-  // one kept whose ready cycle is the first at or after it; none: `fallback`.
-  WaitSplit freeing(Cycle frees, const WaitSplit& fallback) const;
+  // The miss a miss queue that frees at `frees` waits for: the one kept
+  // whose ready cycle is the first at or after it; none: nullptr.
+  const MissWait* freeingMiss(Cycle frees) const;
+  // Its wait; none: `fallback`.
+  WaitSplit freeing(Cycle frees, const WaitSplit& fallback) const {
+    const MissWait* m = freeingMiss(frees);
+    return m ? m->wait : fallback;
+  }
 
  private:
-  std::vector<std::pair<Cycle, WaitSplit>> ring_;
+  std::vector<MissWait> ring_;
   size_t next_ = 0, size_ = 0;
 };
 

@@ -332,7 +332,7 @@ void RopPartition::resolvePhase() {
                                                            : WaitSplit{now, now, now, RootCause::RopCacheMiss};
           if (cache_.stats().misses != misses) {
             last_miss_ = lines_wait;
-            miss_waits_.add(r, lines_wait);
+            miss_waits_.add(now, r, lines_wait);
           }
         }
         ++line_next;

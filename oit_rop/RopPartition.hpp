@@ -219,7 +219,7 @@ class RopPartition : public sc_core::sc_module, public MemoryPort {
       // latest miss stands for.
       if (cache_.stats().misses != misses) {
         last_miss_ = splitWait(now, ready, memory_.probe(), miss_rest_);
-        miss_waits_.add(ready, last_miss_);
+        miss_waits_.add(now, ready, last_miss_);
       }
       return true;
     }

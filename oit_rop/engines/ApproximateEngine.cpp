@@ -47,6 +47,9 @@ void ApproximateEngine::run() {
   Cycle charged = p.now_;  // root causes accounted up to here
   Cycle alu_run_from = 0, alu_run_to = 0;  // the latest run of blends that queued for ALU slots
   Cycle miss_from = 0, miss_to = 0;  // the latest miss's wait in the visit frame (hits under it)
+  Cycle refused_to = 0;  // when the latest access the miss queue refused got its entry
+  Cycle alu_work_to = 0;  // the latest end of a blend's work (the ALU busy up to there)
+  const Cycle atomic_latency = p.cfg_.abuffer.atomic_latency;
   std::array<StageTimeline, kStages> tl;
   tl.fill(StageTimeline(start));
   std::array<StageCycles, kStages> acc;
@@ -292,21 +295,44 @@ void ApproximateEngine::run() {
       while (got == kNever) [[unlikely]] {  // the miss queue lacks entries: retry when enough free
         if (p.cache_.refusedBySet())  // touch() pins no line
           throw std::logic_error(fmt::format("partition {}: set refused in the approximate engine", p.id_));
-        at_cache = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
+        // Waiting for a miss-queue entry is waiting for the miss that frees
+        // it (MissWaits, the cycle engine's rule), for the tail of that
+        // miss's wait: the cycle engine's in-order cache stage has one
+        // refused access at its head, from when the one before it got its
+        // entry (refused_to) to this entry's freeing, and charges it that
+        // part of the miss's split. Here every refused access waits from its
+        // own issue, the waits overlapping (DelayShares adds them up), so its
+        // cycles go in the proportions of that tail. (Until session 21: the
+        // proportions of the latest miss's whole wait, mostly its unloaded
+        // access at the front: dram_latency 4.5 % of the activate-bound frame,
+        // test_bounds.cpp DramActivateLimitFrame, against 0.4 % on the cycle
+        // engine.) No miss kept frees it (a fast-clear fill does): the latest miss's.
+        const Cycle frees = std::max(at_cache + 1, p.cache_.missQueueFreesAt());
+        if (const MissWait* m = p.miss_waits_.freeingMiss(frees)) {
+          Cycle head = std::max({at_cache, m->from, refused_to});
+          if (head >= frees) head = m->from;  // (an earlier refused access waited past it: the whole wait)
+          shares.addLike(frees - at_cache, head, head < frees ? frees : m->ready, m->wait);
+        } else {
+          shares.addLike(frees - at_cache, miss_from, miss_to, p.last_miss_);
+        }
+        at_cache = frees;
+        refused_to = std::max(refused_to, frees);
         moveTo(at_cache, visit_now);
         p.memory_.resetProbe();
         misses = p.cache_.stats().misses;
         got = p.cache_.touch(at_cache, tile, lines, missed);
       }
-      // Waiting for a miss-queue entry: the misses in flight, as the latest one.
-      if (at_cache > issue) shares.addLike(at_cache - issue, miss_from, miss_to, p.last_miss_);
       enter += at_cache - issue;  // waited for a miss-queue entry
       Cycle ready = enter + hit_latency;
       if (missed) {
         ready = got + (enter - at_cache);
         fill_ready[tile] = ready;
-        p.last_miss_ = p.cache_.stats().misses != misses ? splitWait(at_cache, got, p.memory_.probe(), p.miss_rest_)
-                                                         : WaitSplit{at_cache, at_cache, at_cache, RootCause::RopCacheMiss};
+        if (p.cache_.stats().misses != misses) {
+          p.last_miss_ = splitWait(at_cache, got, p.memory_.probe(), p.miss_rest_);
+          p.miss_waits_.add(at_cache, got, p.last_miss_);
+        } else {
+          p.last_miss_ = WaitSplit{at_cache, at_cache, at_cache, RootCause::RopCacheMiss};
+        }
         miss_from = at_cache;
         miss_to = got;
         shares.addWait(at_cache, got, p.last_miss_);
@@ -336,9 +362,18 @@ void ApproximateEngine::run() {
       const Cycle done = blend_start + p.alu_.latency(work);
       if (blend_start > at) {
         tl[4].addLeavingGap(acc[4], at, blend_start, StageStatus::stall(Stall::AtomicWait));
-        shares.add(RootCause::Atomics, blend_start - at);  // the A-buffer's node counter
+        // The A-buffer's node counter: its queueing (the counter's rate,
+        // shared by the partitions) delays the blend; its latency, a fixed
+        // one like the blend's own, only where no earlier blend's work
+        // overlaps it (the cycle engine's atomic_wait: the cycles where every
+        // blend in flight waits for its atomic).
+        const Cycle served = blend_start - atomic_latency;
+        const Cycle exposed_from = std::max(served, alu_work_to);
+        shares.add(RootCause::Atomics,
+                   (served > at ? served - at : 0) + (blend_start > exposed_from ? blend_start - exposed_from : 0));
       }
       tl[4].addLeavingGap(acc[4], blend_start, done, kBusy);
+      alu_work_to = std::max(alu_work_to, done);
       if (appends[kind]) p.nodeWrite();
       release = done + tail;
       locks.released(r.lock, release);

@@ -302,13 +302,19 @@ TEST(RootCauseAccount, ARowCycleOrActivateLimitWaitIsTheBanksWhateverTheBusMoved
 TEST(RootCauseAccount, MissWaitsGiveTheMissThatFreesTheQueue) {
   const WaitSplit w100{10, 20, 30}, w130{11, 21, 31}, w150{12, 22, 32}, fallback{1, 2, 3};
   MissWaits q(2);
-  q.add(100, w100);
+  q.add(0, 100, w100);
   EXPECT_EQ(q.freeing(100, fallback), w100);
-  q.add(150, w150);
-  q.add(130, w130);  // two kept: 100 is forgotten
+  q.add(5, 150, w150);
+  q.add(7, 130, w130);  // two kept: 100 is forgotten
   EXPECT_EQ(q.freeing(90, fallback), w130);
   EXPECT_EQ(q.freeing(131, fallback), w150);
   EXPECT_EQ(q.freeing(151, fallback), fallback);
+  // The miss itself (the approximate engine takes the tail of its wait from when it was asked).
+  const MissWait* m = q.freeingMiss(131);
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(m->from, 5u);
+  EXPECT_EQ(m->ready, 150u);
+  EXPECT_EQ(q.freeingMiss(151), nullptr);
 }
 
 }  // namespace
