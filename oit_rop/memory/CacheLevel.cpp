@@ -476,7 +476,10 @@ Cycle CacheLevel::insertVictim(Cycle now, uint64_t addr, uint32_t line_bytes, ui
       Cycle freed;
       way = allocate(start, set, line, freed);
       accepted = std::max(accepted, freed);
-      record(way).ready = freed;  // its bytes take the way once the old line left it
+      // Not `ready = freed`: with partitions a quantum apart, a victim the
+      // partition ahead evicts "later" may be read by the one behind at its
+      // own, earlier time; the line's data would then wait for the future.
+      // The inserting level already waits for `freed` (accepted).
       surface(way) = s;
     }
     Line* const l = &record(way);
