@@ -126,7 +126,8 @@ bool CycleEngine::step() {
   if (q.empty()) p.refillInput();  // eagerly, so the input's state never depends on skipped cycles
   // A full scoreboard blocks a fragment at the head whatever the issue rate.
   // (Bitwise: front() of an empty Fifo is a stale slot, masked by !q.empty().)
-  const bool blocked = !q.empty() & !(q.front().flags & InRec::kPassEnd) & p.lock_.full();
+  // (As unsigned: clang's -Wbitwise-instead-of-logical takes bool & bool for a typo.)
+  const bool blocked = (unsigned(!q.empty()) & unsigned(!(q.front().flags & InRec::kPassEnd)) & unsigned(p.lock_.full())) != 0;
   const unsigned slots = blocked ? 0 : p.shader_.slots(now);
   while (issued < slots) {
     if (q.empty()) {
@@ -173,7 +174,8 @@ bool CycleEngine::step() {
   // (often mispredicted) branch.
   moved |= (to_alu | accepted | left | shaded | issued) != 0;
   // Input waiting without a free entry (also when no issue slot this cycle).
-  sb_full |= !issued & !q.empty() & !(q.front().flags & InRec::kPassEnd) & p.lock_.full();
+  sb_full |= (unsigned(!issued) & unsigned(!q.empty()) & unsigned(!(q.front().flags & InRec::kPassEnd)) &
+              unsigned(p.lock_.full())) != 0;
 
   // Status of every stage in this cycle (holds until the next evaluated cycle),
   // one byte per stage; the accounts are touched only for stages whose status

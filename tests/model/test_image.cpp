@@ -21,9 +21,10 @@
 using namespace oit::model;
 namespace fs = std::filesystem;
 
-namespace {
-
-// A fresh directory per test, so leftover temporaries can be detected.
+// A fresh directory per test, so leftover temporaries can be detected. Outside
+// the anonymous namespace: the TEST_F classes derive from it, and in the unity
+// build (this file included into a batch) g++ warns of a base with internal
+// linkage (-Wsubobject-linkage).
 class ImageFiles : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -41,6 +42,8 @@ class ImageFiles : public ::testing::Test {
   }
   fs::path dir_;
 };
+
+namespace {
 
 struct Png {
   uint32_t width = 0, height = 0;
