@@ -413,7 +413,8 @@ void addRunCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "Replay a trace through an OIT algorithm; write images and report.json");
   // A later option wins, so scripts can pass defaults and users override them.
   cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  cmd->add_option("--trace,-t", a->trace, "Trace file (.oitt binary or .csv)")->required();
+  // Positional too (`oitsim run scene.oitt -o out`), as `oitsim info` takes it.
+  cmd->add_option("trace,--trace,-t", a->trace, "Trace file (.oitt binary or .csv)")->required();
   cmd->add_option("--out,-o", a->out,
                   "Output folder for image.png, image.pfm, reference.pfm, diff.png, flip.png, report.json")
       ->required();

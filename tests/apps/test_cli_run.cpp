@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "CliRunner.hpp"
@@ -66,6 +67,25 @@ TEST_F(CliRun, FunctionalMlabHasErrorAndAbufferHasNone) {
   EXPECT_EQ(a["image"]["metrics"]["rmse"].get<double>(), 0.0);
   EXPECT_EQ(a["image"]["metrics"]["max_abs"].get<double>(), 0.0);
   EXPECT_EQ(a["image"]["metrics"]["ssim"].get<double>(), 1.0);
+}
+
+// The trace may be given positionally, as `oitsim info` takes it: the same
+// run as with --trace (the image bit for bit); two traces are one too many.
+TEST_F(CliRun, RunTakesTheTraceAsAPositionalArgument) {
+  const std::string named = dir_->file("pos_named"), positional = dir_->file("pos_positional");
+  CliResult r = runOitsim("run --mode functional --algo mlab -q --trace " + trace_ + " --out " + named);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = runOitsim("run " + trace_ + " --mode functional --algo mlab -q --out " + positional);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream a(named + "/image.pfm", std::ios::binary), b(positional + "/image.pfm", std::ios::binary);
+  const std::string image_a((std::istreambuf_iterator<char>(a)), {}), image_b((std::istreambuf_iterator<char>(b)), {});
+  ASSERT_FALSE(image_a.empty());
+  EXPECT_EQ(image_a, image_b);
+  const std::string twice = dir_->file("pos_twice");
+  r = runOitsim("run " + trace_ + " " + trace_ + " --mode functional -q --out " + twice);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("not expected"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(twice));
 }
 
 TEST_F(CliRun, TimingReportHasEveryFieldAndTheFunctionalImage) {
