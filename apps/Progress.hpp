@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace oit::cli {
 
@@ -32,5 +33,7 @@ class Progress {
 std::string humanCount(double n);
 // "1.2 GiB", "34.5 MiB", "12 B".
 std::string humanBytes(double bytes);
+// "1 draw", "3 draws", "2 passes": a count with its noun in number.
+std::string counted(uint64_t n, std::string_view one, std::string_view many);
 
 }  // namespace oit::cli

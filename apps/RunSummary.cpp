@@ -55,10 +55,10 @@ void printTimingSummary(const nlohmann::json& j) {
   const auto& ph = t["phase_cycles"];
   std::string passes;
   for (const auto& c : ph["transparent"]) passes += (passes.empty() ? "" : " + ") + std::to_string(c.get<uint64_t>());
-  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {} partition(s), bound by {} ({:.1f} % of partition-cycles); "
+  fmt::print("timing      {} cycles = {:.1f} us at {} MHz, {}, bound by {} ({:.1f} % of partition-cycles); "
              "phases: opaque {}, transparent {}, resolve {} cycles; {} idle cycles skipped\n",
              t["cycles"].get<uint64_t>(), t["frame_time_us"].get<double>(), t["clock_mhz"].get<double>(),
-             t["partitions"].get<uint64_t>(), t["bound_by"]["resource"].get<std::string>(),
+             counted(t["partitions"].get<uint64_t>(), "partition", "partitions"), t["bound_by"]["resource"].get<std::string>(),
              100.0 * t["bound_by"]["share"].get<double>(), ph["opaque"].get<uint64_t>(), passes.empty() ? "0" : passes,
              ph["resolve"].get<uint64_t>(), t["skipped_idle_cycles"].get<uint64_t>());
   // Root causes in descending order (those above 0.05 %), utilisation per resource.

@@ -210,9 +210,9 @@ void runCapture(CaptureArgs& a, bool has_az, bool has_el, bool has_fov) {
     std::unique_ptr<FragmentSink> writer = createTraceWriter(path, cap.header());
     const capture::CaptureStats st = cap.capture(*writer, az_off);
     writer->commit();
-    fmt::print("{} -> {}: {} fragments, {} draws, {} triangles, {} x {}, {} GL draw calls "
+    fmt::print("{} -> {}: {} fragments, {}, {} triangles, {} x {}, {} GL draw calls "
                "(up to {} records each{}), {:.2f} s ({}fragments/s)\n",
-               fmt::join(o.meshes, "+"), path, st.fragments, cap.header().draws.size(), st.triangles,
+               fmt::join(o.meshes, "+"), path, st.fragments, counted(cap.header().draws.size(), "draw", "draws"), st.triangles,
                o.width, o.height, st.gl_draws, st.capacity,
                st.gl_redraws ? fmt::format(", {} re-issued in halves", st.gl_redraws) : "", st.seconds,
                humanCount(st.seconds > 0 ? st.fragments / st.seconds : 0.0) + " ");

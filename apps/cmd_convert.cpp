@@ -38,8 +38,8 @@ void runConvert(const ConvertArgs& a) {
   }
   progress.finish();
   sink->commit();
-  fmt::print("{} -> {}: {} fragments, {} x {}, {} draws, {} colour\n", a.in, a.out, sink->written(),
-             h.width, h.height, h.draws.size(), toString(h.encoding));
+  fmt::print("{} -> {}: {} fragments, {} x {}, {}, {} colour\n", a.in, a.out, sink->written(),
+             h.width, h.height, counted(h.draws.size(), "draw", "draws"), toString(h.encoding));
 }
 
 }  // namespace

@@ -79,8 +79,8 @@ void runGen(GenArgs& a, bool has_az, bool has_el, bool has_fov, bool has_alpha) 
   bar.finish();
 
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  fmt::print("{} -> {}: {} fragments, {} draws, {} primitives, {} x {}, {} colour, {:.2f} s ({}fragments/s)\n",
-             a.scene, a.output, r.fragments, r.draws, r.primitives, o.width, o.height,
+  fmt::print("{} -> {}: {} fragments, {}, {} primitives, {} x {}, {} colour, {:.2f} s ({}fragments/s)\n",
+             a.scene, a.output, r.fragments, counted(r.draws, "draw", "draws"), r.primitives, o.width, o.height,
              encodingName(o.encoding), secs, humanCount(secs > 0 ? r.fragments / secs : 0.0) + " ");
 }
 

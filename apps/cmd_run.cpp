@@ -365,10 +365,10 @@ void runReplay(RunArgs& a) {
   staged.commit();
 
   if (a.quiet) return;
-  fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {} draws\n", a.trace, h.width, h.height,
-             c.fragments_in, c.opaque, h.draws.size());
-  fmt::print("algorithm   {}, mode {}{}, {} pass(es) over the trace\n", algorithmWithSettings(a.algo, a.params), a.mode,
-             timing ? ", preset " + tree.config().preset : "", c.source_passes);
+  fmt::print("trace       {}: {} x {}, {} fragments ({} opaque), {}\n", a.trace, h.width, h.height,
+             c.fragments_in, c.opaque, counted(h.draws.size(), "draw", "draws"));
+  fmt::print("algorithm   {}, mode {}{}, {} over the trace\n", algorithmWithSettings(a.algo, a.params), a.mode,
+             timing ? ", preset " + tree.config().preset : "", counted(c.source_passes, "pass", "passes"));
   fmt::print("fragments   culled by depth {}, stored {}, merged {}, discarded {}\n", c.culled, c.stored,
              c.merged, c.discarded);
   if (unmodelled.draws)

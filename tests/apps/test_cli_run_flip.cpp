@@ -93,11 +93,24 @@ TEST_F(CliRunFlip, BadPpdIsOneErrorAndWritesNothing) {
 // colour in the format, so its summary names the format only (it said
 // "abuffer (k=4, format fp32)"). With a pool that holds every fragment and
 // fp32 nodes it is the exact reference (FLIP 0).
+// Counts in the summary take their noun in number: adaptive reads the trace
+// twice (its two passes), one-partition runs say "1 partition".
+TEST_F(CliRunFlip, SummaryCountsAgreeInNumber) {
+  CliResult r = runOitsim("run --algo adaptive --layers 2 --set partitions.count=1 --reference none --trace " + trace_ +
+                          " --out " + dir_.file("adaptive"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(", 2 passes over the trace"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" MHz, 1 partition, bound by "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("(s)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("(es)"), std::string::npos) << r.output;
+}
+
 TEST_F(CliRunFlip, SummaryShowsOnlyTheSettingsTheAlgorithmUses) {
   CliResult r = runOitsim("run --mode functional --algo abuffer --layers 2 --set abuffer.nodes_per_pixel=64 --trace " +
                           trace_ + " --out " + dir_.file("abuffer"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("algorithm   abuffer (format fp32), mode functional, 1 pass(es)"), std::string::npos)
+  EXPECT_NE(r.output.find("algorithm   abuffer (format fp32), mode functional, 1 pass over the trace"),
+            std::string::npos)
       << r.output;
   const nlohmann::json j = readJson(dir_.file("abuffer") + "/report.json");
   EXPECT_EQ(j["config"]["ignored_settings"], nlohmann::json({"layers", "bits", "samples", "weight", "seed"}));
