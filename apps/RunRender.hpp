@@ -1,7 +1,7 @@
 // `oitsim run`'s renders and its reference: the image under test rendered
 // with progress and timed, the exact A-buffer reference built in bands that
 // fit the memory budget, and --reference FILE.pfm checked before any work and
-// read after the run. Kept apart from cmd_run.cpp, which calls these.
+// read after the run. Kept apart from RunReplay.cpp, which calls these.
 #pragma once
 
 #include <cstdint>

@@ -1,7 +1,7 @@
 // `oitsim run`'s ordering options: --seeds N (the frame replayed with N
 // shader-latency seeds in child processes, oit_rop/ChildRuns.hpp, and the
 // flicker across them, model/Flicker.hpp) and lock.mode against --mode. Kept
-// apart from cmd_run.cpp, which calls these.
+// apart from RunReplay.cpp, which calls these.
 #pragma once
 
 #include <nlohmann/json.hpp>
