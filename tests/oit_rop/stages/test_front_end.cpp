@@ -29,8 +29,8 @@ using model::testutil::kTranspDraw;
 // partition owns one tile of the row, so both tiles are local tile 0 of
 // their partition. A pixel's tiled number is tile x 64 + (y % 8) x 8 + x % 8;
 // its per-pixel lock address local tile x 64 + (y % 8) x 8 + x % 8.
-struct Bench {
-  Bench(std::vector<Fragment> fs, const std::string& algo, unsigned layers, RopConfig c = config())
+struct FrontEndBench {
+  FrontEndBench(std::vector<Fragment> fs, const std::string& algo, unsigned layers, RopConfig c = config())
       : cfg(c),
         src(model::testutil::header(16, 8), std::move(fs), 3),  // batches of 3: routes straddle them
         classes(src.header()),
@@ -73,7 +73,7 @@ TEST(FrontEnd, RoutesEachRecordToItsTilesOwnerWithItsPixelLockAndIndex) {
   //   2 (3,3)  partition 0, pixel 27: second row of the pixel: stored
   //   3 (9,0)  partition 1, pixel 64 + 0 + 1 = 65, lock 1: stored
   //   4 (3,3)  partition 0, a third fragment on two rows: merged
-  Bench b({frag(3, 3, 0.5f, 1, 0, 0, 0.5f), frag(12, 5, 0.5f, 0, 1, 0, 0.5f), frag(3, 3, 0.4f, 0, 0, 1, 0.5f),
+  FrontEndBench b({frag(3, 3, 0.5f, 1, 0, 0, 0.5f), frag(12, 5, 0.5f, 0, 1, 0, 0.5f), frag(3, 3, 0.4f, 0, 0, 1, 0.5f),
            frag(9, 0, 0.3f, 1, 1, 0, 0.5f), frag(3, 3, 0.45f, 0, 1, 1, 0.5f)},
           "mlab", 2);
   b.routeAll();
@@ -119,7 +119,7 @@ TEST(FrontEnd, CullsAtOrBehindTheOpaqueSurfaceAndAsksForDepthOnlyWithinTheTilesR
   //   3 (3,3) z 0.5: at the opaque depth (a tie is behind): culled, reads depth
   //   4 (5,5) z 0.2: in front of tile 0's nearest opaque: no depth read; inserted
   //   5 (12,1) z 0.9: tile 1, no opaque: min = max = inf, z < min: no depth read; inserted
-  Bench b({frag(3, 3, 0.5f, 1, 1, 1, 1, kOpaqueDraw), frag(4, 4, 0.6f, 1, 1, 1, 1, kOpaqueDraw),
+  FrontEndBench b({frag(3, 3, 0.5f, 1, 1, 1, 1, kOpaqueDraw), frag(4, 4, 0.6f, 1, 1, 1, 1, kOpaqueDraw),
            frag(3, 3, 0.7f, 1, 0, 0, 0.5f), frag(3, 3, 0.5f, 1, 0, 0, 0.5f), frag(5, 5, 0.2f, 1, 0, 0, 0.5f),
            frag(12, 1, 0.9f, 1, 0, 0, 0.5f)},
           "mlab", 2);
@@ -152,9 +152,9 @@ TEST(FrontEnd, CullsAtOrBehindTheOpaqueSurfaceAndAsksForDepthOnlyWithinTheTilesR
 }
 
 TEST(FrontEnd, WithoutHierarchicalZEveryRecordReadsTheDepthTile) {
-  RopConfig c = Bench::config();
+  RopConfig c = FrontEndBench::config();
   c.early_depth.hierarchical = false;
-  Bench b({frag(5, 5, 0.2f, 1, 0, 0, 0.5f), frag(12, 1, 0.9f, 1, 0, 0, 0.5f)}, "mlab", 2, c);
+  FrontEndBench b({frag(5, 5, 0.2f, 1, 0, 0, 0.5f), frag(12, 1, 0.9f, 1, 0, 0, 0.5f)}, "mlab", 2, c);
   b.routeAll();
   EXPECT_EQ(b.records(0)[0].flags, InRec::kNeedsDepthRead);
   EXPECT_EQ(b.records(1)[0].flags, InRec::kNeedsDepthRead);
@@ -163,7 +163,7 @@ TEST(FrontEnd, WithoutHierarchicalZEveryRecordReadsTheDepthTile) {
 TEST(FrontEnd, ATwoPassAlgorithmReadsTheTraceTwiceWithAPassEndAfterEach) {
   // adaptive: two passes over the trace. Each partition's queue holds pass
   // 0's records, a pass end, pass 1's records (indices from 0 again), a pass end.
-  Bench b({frag(3, 3, 0.5f, 1, 0, 0, 0.5f), frag(12, 5, 0.5f, 0, 1, 0, 0.5f), frag(2, 2, 0.4f, 0, 0, 1, 0.5f)},
+  FrontEndBench b({frag(3, 3, 0.5f, 1, 0, 0, 0.5f), frag(12, 5, 0.5f, 0, 1, 0, 0.5f), frag(2, 2, 0.4f, 0, 0, 1, 0.5f)},
           "adaptive", 2);
   ASSERT_EQ(b.fe.passes(), 2u);
   b.routeAll();
@@ -199,10 +199,10 @@ TEST(FrontEnd, QuadLocksGroupAPrimitivesRunAndNumberItsRecords) {
   //   2 (2,0) prim 7: offset 2, lock 1
   //   3 (3,3) prim 8: a new run, offset 0, lock 4 + 1 = 5
   //   4 (0,0) prim 7: a new run again (7 is not the previous primitive), offset 0
-  RopConfig c = Bench::config();
+  RopConfig c = FrontEndBench::config();
   c.lock.granularity = LockGranularity::Quad;
   c.lock.per_primitive = true;
-  Bench b({frag(0, 0, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 7), frag(1, 1, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 7),
+  FrontEndBench b({frag(0, 0, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 7), frag(1, 1, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 7),
            frag(2, 0, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 7), frag(3, 3, 0.5f, 1, 0, 0, 0.5f, kTranspDraw, 8),
            frag(0, 0, 0.4f, 1, 0, 0, 0.5f, kTranspDraw, 7)},
           "mlab", 2, c);
@@ -221,9 +221,9 @@ TEST(FrontEnd, UnorderedLocksDeferTheInsertToThePartition) {
   // lock.mode unordered: the front end routes the fragment beside its record
   // and does not insert it (the partition does at lock entry): no outcome, the
   // per-pixel state as cleared, no stored count; a culled record is still decided here.
-  RopConfig c = Bench::config();
+  RopConfig c = FrontEndBench::config();
   c.lock.mode = LockMode::Unordered;
-  Bench b({frag(3, 3, 0.5f, 1, 1, 1, 1, kOpaqueDraw), frag(3, 3, 0.4f, 1, 0, 0, 0.5f), frag(3, 3, 0.7f, 0, 1, 0, 0.5f),
+  FrontEndBench b({frag(3, 3, 0.5f, 1, 1, 1, 1, kOpaqueDraw), frag(3, 3, 0.4f, 1, 0, 0, 0.5f), frag(3, 3, 0.7f, 0, 1, 0, 0.5f),
            frag(12, 5, 0.2f, 0, 0, 1, 0.5f)},
           "mlab", 2, c);
   ASSERT_TRUE(b.fe.defersInserts());
