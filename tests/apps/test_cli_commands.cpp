@@ -2,6 +2,9 @@
 // was wrong, exit code 1.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <string>
 
 #include "CliRunner.hpp"
@@ -53,6 +56,27 @@ TEST(CliCommands, ConfigMarkdownTakesNoConfigurationOptions) {
   r = runOitsim("config --markdown --set nosuch=1 --preset xyz --config /nonexistent.json");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("(given: --preset, --config, --set)"), std::string::npos) << r.output;
+}
+
+// CONFIG.md's table of every property and preset is `oitsim config
+// --markdown`'s output: a property, default, range or inferred mark changed in
+// the code and not in the document fails here, naming the row.
+TEST(CliCommands, ConfigDocumentHoldsTheGeneratedTable) {
+  CliResult r = runOitsim("config --markdown");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(std::string(OITSIM_SOURCE_DIR) + "/oit_rop/config/CONFIG.md");
+  ASSERT_TRUE(in) << "cannot read oit_rop/config/CONFIG.md";
+  const std::string doc((std::istreambuf_iterator<char>(in)), {});
+  size_t rows = 0;
+  for (const std::string& line : lines(r.output)) {
+    if (line.rfind("| `", 0) != 0) continue;  // the property rows
+    ++rows;
+    EXPECT_NE(doc.find(line + "\n"), std::string::npos)
+        << "CONFIG.md lacks (or has another version of) this row; regenerate its table with `oitsim config "
+           "--markdown`:\n"
+        << line;
+  }
+  EXPECT_GT(rows, 90u) << r.output.substr(0, 500);
 }
 
 }  // namespace
