@@ -3,10 +3,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "CliRunner.hpp"
 
@@ -86,6 +89,45 @@ TEST_F(CliRun, RunTakesTheTraceAsAPositionalArgument) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("not expected"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(twice));
+}
+
+// Every key of a timing report (the A-buffer's and a bounded algorithm's with
+// an l2 and l3) is named in reports/REPORT.md, so the schema page cannot fall
+// behind the code. config.rop is the property tree (oit_rop/config/CONFIG.md);
+// numeric keys are draw ids.
+bool namedIn(const std::string& doc, const std::string& key) {
+  for (size_t at = doc.find(key); at != std::string::npos; at = doc.find(key, at + 1)) {
+    const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+    const bool starts = at == 0 || !word(doc[at - 1]);
+    const bool ends = at + key.size() >= doc.size() || !word(doc[at + key.size()]);
+    if (starts && ends) return true;
+  }
+  return false;
+}
+void collectUnnamed(const nlohmann::json& j, const std::string& path, const std::string& doc,
+                    std::vector<std::string>& out) {
+  if (!j.is_object() || path == "config.rop") return;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = it.key(), at = path.empty() ? key : path + "." + key;
+    if (key.find_first_not_of("0123456789") == std::string::npos) continue;
+    if (!namedIn(doc, key)) out.push_back(at);
+    collectUnnamed(it.value(), at, doc, out);
+  }
+}
+
+TEST_F(CliRun, EveryReportKeyIsNamedInTheSchemaPage) {
+  std::ifstream in(std::string(OITSIM_SOURCE_DIR) + "/reports/REPORT.md");
+  ASSERT_TRUE(in) << "cannot read reports/REPORT.md";
+  const std::string doc((std::istreambuf_iterator<char>(in)), {});
+  for (const std::string algo : {"abuffer", "mlab"}) {
+    const std::string out = dir_->file("schema_" + algo);
+    CliResult r = runOitsim("run " + trace_ + " --algo " + algo + " --set stats.level_miss_classes=true -q --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::vector<std::string> unnamed;
+    collectUnnamed(readJson(out + "/report.json"), "", doc, unnamed);
+    EXPECT_TRUE(unnamed.empty()) << algo << ": report keys reports/REPORT.md does not name: "
+                                 << nlohmann::json(unnamed).dump();
+  }
 }
 
 TEST_F(CliRun, TimingReportHasEveryFieldAndTheFunctionalImage) {
