@@ -77,6 +77,9 @@ TEST(CliCommands, ConfigDocumentHoldsTheGeneratedTable) {
         << line;
   }
   EXPECT_GT(rows, 90u) << r.output.substr(0, 500);
+  // The page's count of them too ("... --markdown` (N properties)").
+  EXPECT_NE(doc.find("(" + std::to_string(rows) + " properties)"), std::string::npos)
+      << "CONFIG.md should say (" << rows << " properties)";
 }
 
 }  // namespace
