@@ -14,7 +14,7 @@
 //
 // From that DRAM base the frames are rough functions of the DRAM's timing: a
 // change far below any step's own cost (input.seed, or dram.controller_ns
-// 0.1 ns = 0.115 cycles longer) moves a frame by 0.6-0.8 % (standard
+// 0.1 ns = 0.115 cycles longer) moves a frame by 0.6-1.0 % (standard
 // deviation over ten seeds), faster as often as slower, with the cycle
 // engine in lockstep (sim.quantum_cycles 1) too. One run per step samples
 // that roughness, not the step. So a DRAM step is judged on the mean frame
