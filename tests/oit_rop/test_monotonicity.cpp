@@ -84,9 +84,9 @@ bool isDramStep(const std::string& path) { return path.rfind("dram.", 0) == 0; }
 // latency 0.1 (k - 3) ns off the configuration's (at most 0.3 ns, 0.35 core
 // cycles: a quarter of the smallest step, one tCK of 1.25 ns on one timing).
 // Seven: over ten seeds one run's change has a standard deviation of up to
-// 0.97 %, so the mean of seven is within about 0.35 % of the step's own
-// effect (one standard error); measured at the change, the worst mean was
-// 0.18 % faster (DESIGN.md).
+// 0.97 %, so the mean of seven is within about 0.37 % of the step's own
+// effect (one standard error); measured at the change, the worst mean of a
+// step was 0.15 % faster (DESIGN.md).
 constexpr unsigned kPerturbations = 7;
 RopConfig perturbed(RopConfig c, unsigned k) {
   c.input.seed = 1 + k;
