@@ -172,7 +172,7 @@ class Monotonicity : public ::testing::TestWithParam<SimEngine> {};
 
 // Runs `cfgs` (each in a child process of its own, as many at a time as
 // there are cores) on the scene; fails the test if any run does not.
-std::vector<ChildRun> runAll(const Scene& sc, const model::AlgorithmParams& p, const std::vector<RopConfig>& cfgs) {
+std::vector<ChildRun> runEachInAChild(const Scene& sc, const model::AlgorithmParams& p, const std::vector<RopConfig>& cfgs) {
   std::vector<TimingJob> jobs;
   for (const RopConfig& c : cfgs) jobs.push_back([&sc, &p, c](const auto&) { return timed("mlab", p, sc.fs, sc.w, sc.h, c); });
   ChildRunOptions o;
@@ -190,15 +190,15 @@ std::vector<ChildRun> runAll(const Scene& sc, const model::AlgorithmParams& p, c
   return out;
 }
 
-uint64_t dramBytes(const ChildRun& x) {
+uint64_t dramBytesOf(const ChildRun& x) {
   return x.stats["memory"]["dram_read_bytes"]["total"].get<uint64_t>() +
          x.stats["memory"]["dram_write_bytes"]["total"].get<uint64_t>();
 }
-double cyclesOf(const ChildRun& x) { return double(x.stats["timing"]["cycles"].get<uint64_t>()); }
-std::string why(const ChildRun& x) {
+double frameCyclesOf(const ChildRun& x) { return double(x.stats["timing"]["cycles"].get<uint64_t>()); }
+std::string missesAndBytes(const ChildRun& x) {
   const auto& m = x.stats["memory"];
   return "cache misses " + std::to_string(x.stats["cache"]["misses"].get<uint64_t>()) + ", l2 misses " +
-         std::to_string(m["levels"][1]["misses"].get<uint64_t>()) + ", DRAM bytes " + std::to_string(dramBytes(x)) +
+         std::to_string(m["levels"][1]["misses"].get<uint64_t>()) + ", DRAM bytes " + std::to_string(dramBytesOf(x)) +
          ", lock waits " + std::to_string(x.stats["lock"]["wait_cycles"].get<uint64_t>());
 }
 
@@ -213,13 +213,13 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
     // The base with the l3 (no DRAM byte), and the DRAM base's perturbed runs.
     const ChildRun ref = runInChild([&] { return timed("mlab", p, sc.fs, sc.w, sc.h, configWith(GetParam(), false)); });
     ASSERT_TRUE(ref.ok) << ref.error;
-    EXPECT_EQ(dramBytes(ref), 0u) << sc.name;
+    EXPECT_EQ(dramBytesOf(ref), 0u) << sc.name;
     std::vector<RopConfig> dram_base;
     for (unsigned k = 0; k < kPerturbations; ++k) dram_base.push_back(perturbed(configWith(GetParam(), true), k));
-    const std::vector<ChildRun> dram_refs = runAll(sc, p, dram_base);
+    const std::vector<ChildRun> dram_refs = runEachInAChild(sc, p, dram_base);
     for (const ChildRun& r : dram_refs) {
       ASSERT_TRUE(r.ok) << sc.name;
-      EXPECT_GT(dramBytes(r), 0u) << sc.name;
+      EXPECT_GT(dramBytesOf(r), 0u) << sc.name;
     }
     for (const auto& [path, value] : worseSteps()) {
       const RopConfig worse = configWith(GetParam(), isDramStep(path), path, value);
@@ -227,12 +227,12 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
         // The mean frame over the perturbed runs, the step's against the base's.
         std::vector<RopConfig> cfgs;
         for (unsigned k = 0; k < kPerturbations; ++k) cfgs.push_back(perturbed(worse, k));
-        const std::vector<ChildRun> runs = runAll(sc, p, cfgs);
+        const std::vector<ChildRun> runs = runEachInAChild(sc, p, cfgs);
         double sum = 0, base_sum = 0;
         std::string each;  // each run's change, for the message
         for (unsigned k = 0; k < kPerturbations; ++k) {
           ASSERT_TRUE(runs[k].ok) << sc.name << " " << path << "=" << value;
-          const double c = cyclesOf(runs[k]), b = cyclesOf(dram_refs[k]);
+          const double c = frameCyclesOf(runs[k]), b = frameCyclesOf(dram_refs[k]);
           if (c != b) dram_steps_that_moved.insert(path + "=" + value);
           sum += c;
           base_sum += b;
@@ -245,13 +245,13 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
         }
         EXPECT_GE(sum, base_sum * 0.995) << sc.name << ": " << path << " = " << value << " made the mean frame "
                                          << 100.0 * faster << " % faster (each run's change, %:" << each
-                                         << "; first run " << why(runs[0]) << " against " << why(dram_refs[0]) << ")";
+                                         << "; first run " << missesAndBytes(runs[0]) << " against " << missesAndBytes(dram_refs[0]) << ")";
         continue;
       }
-      const double base_cycles = cyclesOf(ref);
+      const double base_cycles = frameCyclesOf(ref);
       const auto r = runInChild([&] { return timed("mlab", p, sc.fs, sc.w, sc.h, worse); });
       ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value << ": " << r.error;
-      const double cycles = cyclesOf(r);
+      const double cycles = frameCyclesOf(r);
       const double faster = 1 - cycles / base_cycles;
       if (faster > worst) {
         worst = faster;
@@ -278,7 +278,7 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
       if (path == "input.latency_max" && faster > 0.005) {
         EXPECT_LT(r.stats["lock"]["wait_cycles"].get<double>(), ref.stats["lock"]["wait_cycles"].get<double>())
             << sc.name;
-        EXPECT_LT(faster, 0.01) << sc.name << ": " << why(r) << " against " << why(ref);
+        EXPECT_LT(faster, 0.01) << sc.name << ": " << missesAndBytes(r) << " against " << missesAndBytes(ref);
         continue;
       }
       // The third exception (issue 21, the approximate engine's in-order early
@@ -289,13 +289,13 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
       // for LRU. Only with fewer ROP-cache misses, and by under 1 %.
       if (path == "cache.ways" && faster > 0.005) {
         EXPECT_LT(r.stats["cache"]["misses"].get<double>(), ref.stats["cache"]["misses"].get<double>()) << sc.name;
-        EXPECT_LT(faster, 0.01) << sc.name << ": " << why(r) << " against " << why(ref);
+        EXPECT_LT(faster, 0.01) << sc.name << ": " << missesAndBytes(r) << " against " << missesAndBytes(ref);
         continue;
       }
       EXPECT_GE(cycles, base_cycles * 0.995)
           << sc.name << ": " << path << " = " << value << " made the frame " << 100.0 * (1 - cycles / base_cycles)
-          << " % faster (" << cycles << " against " << base_cycles << " cycles; " << why(r) << " against "
-          << why(ref) << ")";
+          << " % faster (" << cycles << " against " << base_cycles << " cycles; " << missesAndBytes(r) << " against "
+          << missesAndBytes(ref) << ")";
     }
   }
   RecordProperty("largest_speedup_percent", std::to_string(100 * worst) + " (" + worst_what + ")");
