@@ -240,6 +240,11 @@ void CacheLevel::lineOutOfRange(uint64_t line) const {
                                        name_, line * cfg_.line_bytes, 32, kMaxLine, cfg_.line_bytes));
 }
 
+void CacheLevel::cycleOutOfRange(Cycle c) const {
+  throw std::runtime_error(fmt::format("{}: cycle {} is past the {}-bit fill times of its tag store", name_, c,
+                                       Line::kReadyBits));
+}
+
 void CacheLevel::renumberStamps() {
   // Only sets ever allocated into hold stamps; in each, the valid ways'
   // stamps (distinct: every touch takes a new one) become 1..n in their
@@ -367,7 +372,10 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       if (missing == 0) {
         ++stats_.hits[si];
         touchLru(way);
-        done = std::max({done, after_lookup, moved, l->ready});
+        // A fill another partition asked after this lookup (it runs up to a
+        // quantum ahead) is this reader's own miss in lockstep: as long
+        // from its lookup, not the other's future (Line::readyFor).
+        done = std::max({done, after_lookup, moved, l->readyFor(after_lookup)});
         continue;
       }
       ++stats_.misses[si];
@@ -396,7 +404,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
         done = std::max(done, freed);
       }
       l->valid |= missing;
-      l->ready = std::max(l->ready, ready);
+      recordFill(*l, start + cfg_.hit_latency, ready);
       touchLru(way);
       continue;
     }
@@ -417,14 +425,19 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
     }
     if (!l) {
       // Accepted once the way is free too (its old line accepted below).
+      // Not `ready = freed`, as for a victim's copy (insertVictim): the writer
+      // waits for its way (done); the line's data does not. The write may be
+      // another partition's eviction written in at its time, a quantum ahead
+      // of a reader (an l2's victim in a non-victim l3, the A-buffer's node
+      // bursts): a line made ready then would hold that reader until the
+      // other's future.
       Cycle freed;
       way = allocate(start, set, line, freed);
       l = &record(way);
-      l->ready = std::max(l->ready, freed);
       done = std::max(done, freed);
     }
     const uint32_t partial = any & ~whole & ~l->valid;
-    if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
+    if (partial) recordFill(*l, after_lookup, fetch(after_lookup, line, partial, s));
     l->valid |= any;
     l->dirty |= any;
     surface(way) = s;
