@@ -424,16 +424,18 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       continue;
     }
     if (!l) {
-      // Accepted once the way is free too (its old line accepted below).
-      // Not `ready = freed`, as for a victim's copy (insertVictim): the writer
-      // waits for its way (done); the line's data does not. The write may be
-      // another partition's eviction written in at its time, a quantum ahead
-      // of a reader (an l2's victim in a non-victim l3, the A-buffer's node
-      // bursts): a line made ready then would hold that reader until the
-      // other's future.
+      // Accepted once the way is free too (its old line accepted below), and
+      // its data is there then, for a reader whose lookup comes after this
+      // write (its writer's next read, as before). The write may be another
+      // partition's, at its time a quantum ahead of a reader behind (an l2's
+      // eviction of that reader's line written into a non-victim l3, the
+      // A-buffer's node bursts): that reader waits only as long as the way
+      // took, from its own lookup (Line::readyFor), not until the other's
+      // future.
       Cycle freed;
       way = allocate(start, set, line, freed);
       l = &record(way);
+      recordFill(*l, start, freed);
       done = std::max(done, freed);
     }
     const uint32_t partial = any & ~whole & ~l->valid;

@@ -414,9 +414,10 @@ TEST(CacheLevel, AWritePassedThroughAVictimLevelIsAcceptedWhenBelowAcceptedIt) {
 // Partitions a quantum apart (DESIGN.md, "Structure (SystemC)"): a line
 // another partition's eviction wrote into a level below at its own, later
 // time is read back by a partition behind at its earlier time, and must not
-// wait for the other's time (the write-allocate's way: the writer waits for
-// it, the data does not; the same for a victim's copy in a victim-only level,
-// insertVictim). An l2 of one set of two ways (16 B a clock, 20-cycle
+// wait for the other's time (a write-allocate's line is there once its way is
+// free for a reader after the write; one whose lookup came before it waits as
+// long as the way took, from its own lookup; a victim's copy in a victim-only
+// level does not wait for its way, insertVictim). An l2 of one set of two ways (16 B a clock, 20-cycle
 // lookups) above a non-victim l3 (16 sets of 4 ways, same port and lookup)
 // above DRAM (FakeBelow, 100 cycles); the ports keep 24,096 cycles (a quantum
 // of 10,000: 2 x 10,000 + 4,096). Partition B writes Y (line 0) at 0, dirty;
@@ -424,10 +425,12 @@ TEST(CacheLevel, AWritePassedThroughAVictimLevelIsAcceptedWhenBelowAcceptedIt) {
 // at 10,000: an l2 miss whose fill comes from the l3 (its port 10,020..10,024,
 // lookup to 10,040, a miss: DRAM 10,040 -> 10,140), and whose way is Y's (the
 // LRU): Y is written into the l3 at 10,000 (its port 10,000..10,004, an
-// empty way). B, behind, reads Y at 100: an l2 miss (its port 100..104,
+// empty way: free at once, Y's data there at 10,000 for a lookup after the
+// write). B, behind, reads Y at 100: an l2 miss (its port 100..104,
 // lookup to 120), X1 the l2's victim (written into the l3 at 100: port
 // 100..104, accepted at 104), Y's fill from the l3 at 120 (port 120..124,
-// lookup to 140, a hit): ready at max(120, 104, 140, 104) = 140. Before the
+// lookup to 140, before the write at 10,000: a hit that waits as long as Y's
+// way took, 0, from 140): ready at max(120, 104, 140, 104) = 140. Before the
 // fix the l3's copy of Y was ready when its way was free at A's time, 10,000,
 // and B waited until then. (In lockstep Y would still be in the l2 at 100:
 // a hit at 120; the 20 cycles are the interleave's, the LRU state seen a
