@@ -16,9 +16,7 @@ OitRop::OitRop(sc_core::sc_module_name name, const PartitionSetup& setup, const 
   // The shared levels, from the DRAM up: l3 behind l2 (a victim l3 gets the
   // l2's evictions), the first of them the partitions' entry.
   const RopConfig& c = *setup.cfg;
-  // Partitions run up to a quantum apart; a level's later requests (an l2 miss
-  // after its lookup) a little further: the ports keep twice that and more.
-  const Cycle lookback = 2 * std::max<Cycle>(1, c.sim.quantum_cycles) + 4096;
+  const Cycle lookback = PortCalendar::sharedLookback(c.sim.quantum_cycles);
   MemoryPort* below = &dram_.entry();
   if (c.l2.size_bytes != 0) {
     if (c.l3.size_bytes != 0) {

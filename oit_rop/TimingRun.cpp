@@ -18,6 +18,7 @@
 #include "oit_rop/Bottleneck.hpp"
 #include "oit_rop/memory/ArrayLayout.hpp"
 #include "oit_rop/memory/CacheLevel.hpp"
+#include "oit_rop/memory/PortCalendar.hpp"
 #include "oit_rop/stages/BlendAlu.hpp"
 #include "oit_rop/stages/FrontEnd.hpp"
 #include "oit_rop/OitRop.hpp"
@@ -251,7 +252,9 @@ TimingResult runTiming(FragmentSource& trace, model::OitAlgorithm& algo, const R
   std::unique_ptr<NodeCounter> counter;
   std::unique_ptr<NodePool> pool;
   if (!algo.bounded()) {
-    counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency);
+    // Partitions run up to a quantum apart: its calendar keeps as much as the shared levels' ports.
+    counter = std::make_unique<NodeCounter>(cfg.abuffer.atomics_per_clock, cfg.abuffer.atomic_latency,
+                                            PortCalendar::sharedLookback(cfg.sim.quantum_cycles));
     setup.counter = counter.get();
     pool = std::make_unique<NodePool>(map.node_pool, algo.poolNodeBytes(), cfg.dram.burst_bytes);
     setup.pool = pool.get();

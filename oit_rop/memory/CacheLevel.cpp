@@ -240,6 +240,11 @@ void CacheLevel::lineOutOfRange(uint64_t line) const {
                                        name_, line * cfg_.line_bytes, 32, kMaxLine, cfg_.line_bytes));
 }
 
+void CacheLevel::cycleOutOfRange(Cycle c) const {
+  throw std::runtime_error(fmt::format("{}: cycle {} is past the {}-bit fill times of its tag store", name_, c,
+                                       Line::kReadyBits));
+}
+
 void CacheLevel::renumberStamps() {
   // Only sets ever allocated into hold stamps; in each, the valid ways'
   // stamps (distinct: every touch takes a new one) become 1..n in their
@@ -367,7 +372,10 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       if (missing == 0) {
         ++stats_.hits[si];
         touchLru(way);
-        done = std::max({done, after_lookup, moved, l->ready});
+        // A fill another partition asked after this lookup (it runs up to a
+        // quantum ahead) is this reader's own miss in lockstep: as long
+        // from its lookup, not the other's future (Line::readyFor).
+        done = std::max({done, after_lookup, moved, l->readyFor(after_lookup)});
         continue;
       }
       ++stats_.misses[si];
@@ -396,7 +404,7 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
         done = std::max(done, freed);
       }
       l->valid |= missing;
-      l->ready = std::max(l->ready, ready);
+      recordFill(*l, start + cfg_.hit_latency, ready);
       touchLru(way);
       continue;
     }
@@ -416,15 +424,22 @@ Cycle CacheLevel::access(Cycle now, uint64_t addr, uint32_t bytes, bool write, S
       continue;
     }
     if (!l) {
-      // Accepted once the way is free too (its old line accepted below).
+      // Accepted once the way is free too (its old line accepted below), and
+      // its data is there then, for a reader whose lookup comes after this
+      // write (its writer's next read, as before). The write may be another
+      // partition's, at its time a quantum ahead of a reader behind (an l2's
+      // eviction of that reader's line written into a non-victim l3, the
+      // A-buffer's node bursts): that reader waits only as long as the way
+      // took, from its own lookup (Line::readyFor), not until the other's
+      // future.
       Cycle freed;
       way = allocate(start, set, line, freed);
       l = &record(way);
-      l->ready = std::max(l->ready, freed);
+      recordFill(*l, start, freed);
       done = std::max(done, freed);
     }
     const uint32_t partial = any & ~whole & ~l->valid;
-    if (partial) l->ready = std::max(l->ready, fetch(after_lookup, line, partial, s));
+    if (partial) recordFill(*l, after_lookup, fetch(after_lookup, line, partial, s));
     l->valid |= any;
     l->dirty |= any;
     surface(way) = s;

@@ -133,10 +133,30 @@ class CacheLevel final : public MemoryPort {
   // never used are never touched (a 128 MB level has 2 M lines; a frame uses
   // a fraction of them).
   struct Line {
-    Cycle ready = 0;  // its last fill's data is there
+    // Its latest fill: the cycle its data is there (the low 40 bits) and how
+    // long after its request to the level below (the high 24, saturated):
+    // a reader whose lookup came before that request (a partition behind
+    // the one that missed) waits as long from its own lookup (readyFor).
+    uint64_t fill = 0;
     uint32_t valid = 0, dirty = 0;
+    static constexpr unsigned kReadyBits = 40;
+    static constexpr uint64_t kReadyMask = (uint64_t(1) << kReadyBits) - 1, kMaxLatency = (uint64_t(1) << 24) - 1;
+    Cycle ready() const { return fill & kReadyMask; }
+    // When the data is there for a lookup done at `looked_up`.
+    Cycle readyFor(Cycle looked_up) const {
+      const Cycle r = ready(), latency = fill >> kReadyBits;
+      return r - latency > looked_up ? looked_up + latency : r;
+    }
   };
   static_assert(sizeof(Line) == 16);
+  // A fill of `l` asked below at `asked` whose data is there at `ready`: it
+  // becomes the line's fill when it is there later than the one it has.
+  void recordFill(Line& l, Cycle asked, Cycle ready) const {
+    if (ready <= l.ready()) return;
+    if (ready > Line::kReadyMask) [[unlikely]] cycleOutOfRange(ready);
+    l.fill = ready | std::min<uint64_t>(ready - std::min(asked, ready), Line::kMaxLatency) << Line::kReadyBits;
+  }
+  [[noreturn]] void cycleOutOfRange(Cycle c) const;
   static constexpr size_t kNoWay = ~size_t(0);
   // Where a set's records start in its block, and the block's size (a
   // multiple of the host's 64-byte cache line, so that a set's tags never

@@ -27,6 +27,13 @@ namespace oit::rop {
 
 class PortCalendar {
  public:
+  // The lookback of the calendars the partitions share (the l2's and l3's
+  // ports, the A-buffer's node counter): partitions run up to a quantum
+  // apart, and a level's later requests (an l2 miss after its lookup) a
+  // little further, so they keep twice that and more.
+  static Cycle sharedLookback(uint64_t quantum_cycles) {
+    return 2 * (quantum_cycles > 1 ? quantum_cycles : 1) + 4096;
+  }
   PortCalendar(double bytes_per_clock, Cycle lookback);
   // Books `bytes` from cycle `now` on; `start`: the first cycle moving them,
   // `end`: the cycle after the last (the transfer is done at `end`).

@@ -410,3 +410,65 @@ TEST(CacheLevel, AWritePassedThroughAVictimLevelIsAcceptedWhenBelowAcceptedIt) {
   EXPECT_EQ(dram.write_at, 100u);
   EXPECT_FALSE(l3.resident(512));
 }
+
+// Partitions a quantum apart (DESIGN.md, "Structure (SystemC)"): a line
+// another partition's eviction wrote into a level below at its own, later
+// time is read back by a partition behind at its earlier time, and must not
+// wait for the other's time (a write-allocate's line is there once its way is
+// free for a reader after the write; one whose lookup came before it waits as
+// long as the way took, from its own lookup; a victim's copy in a victim-only
+// level does not wait for its way, insertVictim). An l2 of one set of two ways (16 B a clock, 20-cycle
+// lookups) above a non-victim l3 (16 sets of 4 ways, same port and lookup)
+// above DRAM (FakeBelow, 100 cycles); the ports keep 24,096 cycles (a quantum
+// of 10,000: 2 x 10,000 + 4,096). Partition B writes Y (line 0) at 0, dirty;
+// partition A, a quantum ahead, writes X1 (line 1) at 10 and reads X2 (line 2)
+// at 10,000: an l2 miss whose fill comes from the l3 (its port 10,020..10,024,
+// lookup to 10,040, a miss: DRAM 10,040 -> 10,140), and whose way is Y's (the
+// LRU): Y is written into the l3 at 10,000 (its port 10,000..10,004, an
+// empty way: free at once, Y's data there at 10,000 for a lookup after the
+// write). B, behind, reads Y at 100: an l2 miss (its port 100..104,
+// lookup to 120), X1 the l2's victim (written into the l3 at 100: port
+// 100..104, accepted at 104), Y's fill from the l3 at 120 (port 120..124,
+// lookup to 140, before the write at 10,000: a hit that waits as long as Y's
+// way took, 0, from 140): ready at max(120, 104, 140, 104) = 140. Before the
+// fix the l3's copy of Y was ready when its way was free at A's time, 10,000,
+// and B waited until then. (In lockstep Y would still be in the l2 at 100:
+// a hit at 120; the 20 cycles are the interleave's, the LRU state seen a
+// quantum on.)
+TEST(CacheLevel, ALineAnotherPartitionWroteBelowAQuantumAheadIsNotReadyOnlyAtItsTime) {
+  FakeBelow dram;
+  constexpr Cycle kLookback = 2 * 10000 + 4096;
+  CacheLevel l3("l3", small(4096, 4), kLookback, dram);
+  CacheLevel l2("l2", small(128, 2), kLookback, l3);
+  l2.access(0, 0, 64, true, Surface::BlendArrays);                               // B: Y dirty
+  l2.access(10, 64, 64, true, Surface::BlendArrays);                             // A: X1 dirty
+  ASSERT_EQ(l2.access(10000, 128, 64, false, Surface::BlendArrays), 10140u);     // A: X2 evicts Y
+  ASSERT_TRUE(l3.resident(0));
+  ASSERT_FALSE(l2.resident(0));
+  EXPECT_EQ(l2.access(100, 0, 64, false, Surface::BlendArrays), 140u);           // B reads Y back
+  EXPECT_EQ(dram.bytes(true), 0u);
+  // The writer itself still waits for its way: covered by
+  // AWriteThatAllocatesWaitsForItsDirtyVictimsAcceptanceBelow.
+}
+
+// A hit under a fill another partition asked for after the hit's lookup (it
+// runs up to a quantum ahead): in lockstep that fill was not asked yet, and
+// the reader would have missed itself. An l2 (4 KiB, 4 ways, 16 B a clock,
+// 20-cycle lookups) above DRAM (FakeBelow, 100 cycles); the ports keep 24,096
+// cycles (a quantum of 10,000). Partition A reads X at 10,000: a miss, its
+// port 10,000..10,004, the fill asked at 10,020, there at 10,120. Partition
+// B, behind, reads X at 100: its port 100..104, lookup done at 120, before
+// A's fill was asked (10,020): its data is there as long after its lookup as
+// A's was after its request, 120 + 100 = 220 (what its own miss would have
+// taken); before the fix it waited for A's fill, 10,120. A later reader whose
+// lookup comes after the request (A again at 10,050: lookup done at 10,070)
+// waits for the fill in flight, 10,120, as always (MissThenHitLatency).
+TEST(CacheLevel, AHitUnderAFillAskedAfterItsLookupWaitsAsLongFromItsLookup) {
+  FakeBelow dram;
+  CacheLevel l2("l2", small(4096, 4), 2 * 10000 + 4096, dram);
+  EXPECT_EQ(l2.access(10000, 0, 64, false, Surface::BlendArrays), 10120u);  // A
+  EXPECT_EQ(l2.access(100, 0, 64, false, Surface::BlendArrays), 220u);      // B, a quantum behind
+  EXPECT_EQ(l2.access(10050, 0, 64, false, Surface::BlendArrays), 10120u);  // A, under its own fill
+  EXPECT_EQ(l2.stats().hits[0], 2u);
+  EXPECT_EQ(dram.reqs.size(), 1u);  // no second fill is booked: the reader's wait is shifted, not re-asked
+}

@@ -43,3 +43,23 @@ TEST(NodeCounter, ALaterCallForAnEarlierCycleFillsTheGap) {
   EXPECT_EQ(c.grant(5), 5u);
   EXPECT_EQ(c.grant(150), 200u);  // 100..199 taken
 }
+
+// Partitions a quantum of 100,000 apart: the calendar keeps the shared
+// levels' lookback (2 x 100,000 + 4,096 = 204,096 cycles behind the latest
+// request; a ring of 524,288 cycles, half of it behind the latest), so a
+// partition behind is served at its own cycle. 1 atomic per clock, latency 10:
+// the partition ahead takes cycle 100,000 (back at 100,010); the one behind
+// asks at 10 and is served at 10, back at 20. Before, the window was 16,384
+// cycles whatever the quantum: the first request retired everything before
+// 100,000 - 8,192 = 91,808, and the one behind was served there (back at
+// 91,818), in the other's future. With the default quantum (200: a lookback
+// of 4,496) the window stays 16,384, as before.
+TEST(NodeCounter, APartitionAQuantumBehindIsServedAtItsOwnCycle) {
+  NodeCounter c(1.0, 10, 2 * 100000 + 4096);
+  EXPECT_EQ(c.grant(100000), 100010u);
+  EXPECT_EQ(c.grant(10), 20u);
+  EXPECT_EQ(c.waitCycles(), 0u);
+  NodeCounter small_window(1.0, 10, 2 * 200 + 4096);  // the window's floor: 8,192 behind
+  EXPECT_EQ(small_window.grant(100000), 100010u);
+  EXPECT_EQ(small_window.grant(10), 91818u);
+}
