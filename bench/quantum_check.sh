@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The quantum's error on every preset: frames at lockstep partitions
-# (sim.quantum_cycles=1), the default quantum (200) and larger ones, against
+# (sim.quantum_cycles=1), the default quantum (16), the former default (200) and larger ones, against
 # lockstep, with both engines. Partitions up to a quantum apart share the l2,
 # the l3, the DRAM controller and the A-buffer's node counter; a frame whose
 # error grows with the quantum without bound, or moves by more than the
@@ -10,7 +10,7 @@
 #
 #   bench/quantum_check.sh [OITSIM=build/apps/oitsim] [WORKDIR=out/bench/quantum-check]
 #
-# Environment: QUANTA (default "1 200 5000 100000"; the first is the
+# Environment: QUANTA (default "1 16 200 5000 100000"; the first is the
 # reference), PRESETS (default "iris-pro-5200 titan-x-maxwell navi21"; the
 # aliases igpu and dgpu name the first two), ALGOS (default "mlab adaptive
 # abuffer wboit", k=4), ENGINES (default "cycle approximate"), JOBS (runs at a
@@ -22,7 +22,7 @@
 set -euo pipefail
 oitsim=$(realpath "${1:-build/apps/oitsim}")
 work=${2:-out/bench/quantum-check}
-quanta=${QUANTA:-1 200 5000 100000}
+quanta=${QUANTA:-1 16 200 5000 100000}
 presets=${PRESETS:-iris-pro-5200 titan-x-maxwell navi21}
 algos=${ALGOS:-mlab adaptive abuffer wboit}
 engines=${ENGINES:-cycle approximate}
@@ -53,7 +53,10 @@ for e in $engines; do
 done
 echo "quantum_check: $(wc -l <"$list") runs, $jobs at a time" >&2
 # shellcheck disable=SC2016
-xargs -P "$jobs" -L 1 sh -c 'd=$1; shift; "$0" run -o "$d" "$@" >/dev/null || echo "failed: $d" >&2' "$oitsim" <"$list"
+# (Nothing to run: xargs would still start one sh, without a folder.)
+if [ -s "$list" ]; then
+  xargs -P "$jobs" -L 1 sh -c 'd=$1; shift; "$0" run -o "$d" "$@" >/dev/null || echo "failed: $d" >&2' "$oitsim" <"$list"
+fi
 python3 - "$work" "$quanta" "$presets" "$algos" "$engines" <<'PY'
 import json, sys
 work, quanta, presets, algos, engines = sys.argv[1], *[s.split() for s in sys.argv[2:]]

@@ -321,7 +321,10 @@ const std::vector<Property>& registry() {
       boolean("skip.idle_cycles", &R::skip, &SkipConfig::idle_cycles,
               "the simulator jumps over cycles where nothing can move"),
 
-      integer("sim.quantum_cycles", &R::sim, &SimConfig::quantum_cycles, 1, 1000000000, "cycles",
+      // At most 100000: the shared levels' port calendars and the node counter
+      // keep 2 x quantum cycles of bookings (4 bytes a cycle per port; at 10^9
+      // that was 16 GiB per l2 slice, which the memory pre-check did not count).
+      integer("sim.quantum_cycles", &R::sim, &SimConfig::quantum_cycles, 1, 100000, "cycles",
               "tlm_quantumkeeper quantum: partitions may run this far apart, which changes how their DRAM "
               "requests interleave (1 = lockstep; DESIGN.md)"),
       enumeration("sim.engine", &R::sim, &SimConfig::engine, {"cycle", "approximate"},

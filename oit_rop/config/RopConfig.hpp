@@ -176,9 +176,10 @@ struct SkipConfig {
 };
 
 struct SimConfig {
-  // tlm_quantumkeeper quantum: 32 keeps DRAM-bound frames within about 1.4 % of
-  // lockstep where 200 was off by up to 9 % (DESIGN.md, "The quantum").
-  uint64_t quantum_cycles = 32;
+  // tlm_quantumkeeper quantum: 16 keeps every frame of bench/quantum_check.sh
+  // within 1.4 % of lockstep, where 200 was off by up to 9 % and 32 by up to
+  // 5.9 % (DESIGN.md, "Structure (SystemC)").
+  uint64_t quantum_cycles = 16;
   SimEngine engine = SimEngine::CycleStepped;
   bool operator==(const SimConfig&) const = default;
 };

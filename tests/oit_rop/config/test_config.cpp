@@ -107,6 +107,9 @@ TEST(ConfigTree, BadValues) {
   // A stage takes at least one cycle: 0 was accepted and ran as 1.
   e = errorOf([&] { t.set("input.latency_min", "0"); });
   EXPECT_EQ(e, "input.latency_min: '0' is out of range; expected an integer [1, 1000000] (cycles)");
+  // The shared levels keep 2 x quantum cycles of port bookings: at most 100000.
+  e = errorOf([&] { t.set("sim.quantum_cycles", "1000000"); });
+  EXPECT_EQ(e, "sim.quantum_cycles: '1000000' is out of range; expected an integer [1, 100000] (cycles)");
   e = errorOf([&] { t.set("early_depth.latency", "0"); });
   EXPECT_EQ(e, "early_depth.latency: '0' is out of range; expected an integer [1, 10000] (cycles)");
   // A number past the double range is a range error too (it said "not a number").
