@@ -52,8 +52,9 @@ TEST(NodeCounter, ALaterCallForAnEarlierCycleFillsTheGap) {
 // asks at 10 and is served at 10, back at 20. Before, the window was 16,384
 // cycles whatever the quantum: the first request retired everything before
 // 100,000 - 8,192 = 91,808, and the one behind was served there (back at
-// 91,818), in the other's future. With the default quantum (200: a lookback
-// of 4,496) the window stays 16,384, as before.
+// 91,818), in the other's future. With a small quantum (200, the default
+// until session 22: a lookback of 4,496; the default 16 even less) the window
+// stays 16,384, as before.
 TEST(NodeCounter, APartitionAQuantumBehindIsServedAtItsOwnCycle) {
   NodeCounter c(1.0, 10, 2 * 100000 + 4096);
   EXPECT_EQ(c.grant(100000), 100010u);
