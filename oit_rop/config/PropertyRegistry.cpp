@@ -322,8 +322,10 @@ const std::vector<Property>& registry() {
               "the simulator jumps over cycles where nothing can move"),
 
       // At most 100000: the shared levels' port calendars and the node counter
-      // keep 2 x quantum cycles of bookings (4 bytes a cycle per port; at 10^9
-      // that was 16 GiB per l2 slice, which the memory pre-check did not count).
+      // keep rings of a power of two >= 2 x their lookback (2 x quantum +
+      // 4096) cycles, 4 bytes a cycle per port and 8 for the counter: at
+      // 100000 2 and 4 MiB; at 10^9 16 GiB per l2 slice, which the memory
+      // pre-check did not count.
       integer("sim.quantum_cycles", &R::sim, &SimConfig::quantum_cycles, 1, 100000, "cycles",
               "tlm_quantumkeeper quantum: partitions may run this far apart, which changes how their DRAM "
               "requests interleave (1 = lockstep; DESIGN.md)"),
