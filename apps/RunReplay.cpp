@@ -42,7 +42,6 @@
 namespace oit::cli {
 
 namespace fs = std::filesystem;
-using model::AlgorithmParams;
 
 namespace {
 
