@@ -52,6 +52,10 @@ class Builder {
   uint32_t prim_ = 0;
 };
 
+// A braced list draws left to right; a call's arguments are evaluated in an
+// order each compiler picks (g++ right to left, clang left to right), so a
+// call never takes two draws: the later arguments' draws are made first, into
+// named values, in g++'s order, which the committed stress table was made with.
 Rgb randomColour(SplitMix64& rng) { return {rng.open01(), rng.open01(), rng.open01()}; }
 
 // n fragments at pixel (x, y), random depth in (0,1), alpha from `alpha`.
@@ -82,7 +86,10 @@ StressCase constantColourCase(const char* name, const char* what, float a, Rgb c
   Builder b(name, what, bg);
   SplitMix64 rng(seed);
   for (unsigned i = 0; i < 4096; ++i) b.glass(0, 0, rng.open01(), c, a);
-  for (unsigned i = 0; i < 16; ++i) b.glass(1, 1, rng.open01(), randomColour(rng), a);
+  for (unsigned i = 0; i < 16; ++i) {
+    const Rgb random = randomColour(rng);
+    b.glass(1, 1, rng.open01(), random, a);
+  }
   b.shuffle(rng);
   return b.take();
 }
@@ -157,8 +164,16 @@ const std::vector<CaseDef>& caseDefs() {
          SplitMix64 rng(19);
          const Rgb front{0.8f, 0.3f, 0.1f};
          b.glass(0, 0, 0.25f, front, 1.0f);
-         for (unsigned i = 0; i < 4095; ++i) b.glass(0, 0, 0.3f + 0.65f * rng.open01(), randomColour(rng), rng.open01());
-         for (unsigned i = 0; i < 4095; ++i) b.glass(1, 1, 0.3f + 0.65f * rng.open01(), randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 4095; ++i) {
+           const float a = rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(0, 0, 0.3f + 0.65f * rng.open01(), c, a);
+         }
+         for (unsigned i = 0; i < 4095; ++i) {
+           const float a = rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(1, 1, 0.3f + 0.65f * rng.open01(), c, a);
+         }
          b.glass(1, 1, 0.25f, front, 1.0f);
          return b.take();
        }},
@@ -167,11 +182,17 @@ const std::vector<CaseDef>& caseDefs() {
          // Tie rule: a later-submitted fragment is in front (painter's order).
          Builder b("equal_depths_512", "512 fragments at one depth (0,0); 3 at one depth (1,1); 64 on two depths (0,1)");
          SplitMix64 rng(20);
-         for (unsigned i = 0; i < 512; ++i) b.glass(0, 0, 0.5f, randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 512; ++i) {
+           const float a = rng.open01();
+           b.glass(0, 0, 0.5f, randomColour(rng), a);
+         }
          b.glass(1, 1, 0.5f, {1, 0, 0}, 0.5f);
          b.glass(1, 1, 0.5f, {0, 1, 0}, 0.5f);
          b.glass(1, 1, 0.5f, {0, 0, 1}, 0.5f);
-         for (unsigned i = 0; i < 64; ++i) b.glass(0, 1, (i % 2) ? 0.25f : 0.75f, randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 64; ++i) {
+           const float a = rng.open01();
+           b.glass(0, 1, (i % 2) ? 0.25f : 0.75f, randomColour(rng), a);
+         }
          return b.take();
        }},
       {"depth_0_1_denormal",
@@ -186,7 +207,11 @@ const std::vector<CaseDef>& caseDefs() {
          const std::array<unsigned, 9> order{6, 2, 8, 0, 5, 3, 1, 7, 4};
          SplitMix64 rng(21);
          for (unsigned i : order) b.glass(0, 0, depths[i], randomColour(rng), 0.5f);
-         for (unsigned i = 0; i < 1024; ++i) b.glass(1, 1, depths[rng.below(9)], randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 1024; ++i) {
+           const float a = rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(1, 1, depths[rng.below(9)], c, a);
+         }
          return b.take();
        }},
       {"merge_chain_8bit_1024",
@@ -237,13 +262,28 @@ const std::vector<CaseDef>& caseDefs() {
          SplitMix64 rng(26);
          for (unsigned i = 0; i < 2048; ++i) {
            if (i == 1000) b.opaque(0, 0, 0.3f, {0.1f, 0.7f, 0.2f});
-           if (i % 256 == 0) b.glass(0, 0, 0.3f, randomColour(rng), rng.open01());
-           b.glass(0, 0, rng.open01(), randomColour(rng), rng.open01());
+           if (i % 256 == 0) {
+             const float a = rng.open01();
+             b.glass(0, 0, 0.3f, randomColour(rng), a);
+           }
+           {
+             const float a = rng.open01();
+             const Rgb c = randomColour(rng);
+             b.glass(0, 0, rng.open01(), c, a);
+           }
          }
-         for (unsigned i = 0; i < 256; ++i) b.glass(1, 1, rng.open01(), randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 256; ++i) {
+           const float a = rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(1, 1, rng.open01(), c, a);
+         }
          b.opaque(1, 1, 0.0f, {0.9f, 0.8f, 0.7f});
          b.opaque(0, 1, 0.6f, {0.5f, 0.5f, 0.0f});
-         for (unsigned i = 0; i < 64; ++i) b.glass(0, 1, rng.open01(), randomColour(rng), rng.open01());
+         for (unsigned i = 0; i < 64; ++i) {
+           const float a = rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(0, 1, rng.open01(), c, a);
+         }
          b.opaque(0, 1, 0.6f, {0.0f, 0.5f, 0.5f});
          return b.take();
        }},
@@ -253,7 +293,11 @@ const std::vector<CaseDef>& caseDefs() {
          // its fp16 alpha sum stops growing; wavg's count grows past 2^16.
          Builder b("tail_count_70000", "70000 fragments of alpha in (0,0.01) on one pixel: 16-bit counters saturate");
          SplitMix64 rng(27);
-         for (unsigned i = 0; i < 70000; ++i) b.glass(0, 0, rng.open01(), randomColour(rng), 0.01f * rng.open01());
+         for (unsigned i = 0; i < 70000; ++i) {
+           const float a = 0.01f * rng.open01();
+           const Rgb c = randomColour(rng);
+           b.glass(0, 0, rng.open01(), c, a);
+         }
          return b.take();
        }},
       {"white_on_white",
@@ -263,8 +307,14 @@ const std::vector<CaseDef>& caseDefs() {
          Builder b("white_on_white", "colour 1 over background 1 (exact 1), colour 0 (1,1), alphas from the issue's set",
                    {1.0f, 1.0f, 1.0f});
          SplitMix64 rng(28);
-         for (unsigned i = 0; i < 1024; ++i) b.glass(0, 0, rng.open01(), {1, 1, 1}, kAlphaSet[rng.below(6)]);
-         for (unsigned i = 0; i < 1024; ++i) b.glass(1, 1, rng.open01(), {0, 0, 0}, kAlphaSet[rng.below(6)]);
+         for (unsigned i = 0; i < 1024; ++i) {
+           const float a = kAlphaSet[rng.below(6)];
+           b.glass(0, 0, rng.open01(), {1, 1, 1}, a);
+         }
+         for (unsigned i = 0; i < 1024; ++i) {
+           const float a = kAlphaSet[rng.below(6)];
+           b.glass(1, 1, rng.open01(), {0, 0, 0}, a);
+         }
          return b.take();
        }},
       {"alpha_denormal_x4096",

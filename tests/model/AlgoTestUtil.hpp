@@ -58,9 +58,13 @@ inline std::vector<Fragment> randomScene(uint32_t w, uint32_t h, unsigned maxDep
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
       const unsigned n = minDepth + rng() % (maxDepth - minDepth + 1);
-      for (unsigned i = 0; i < n; ++i)
-        fs.push_back(frag(uint16_t(x), uint16_t(y), 0.05f + 0.9f * u(rng), u(rng), u(rng), u(rng),
-                          0.05f + 0.95f * u(rng), kTranspDraw, prim++));
+      for (unsigned i = 0; i < n; ++i) {
+        // One draw per declarator: a call's arguments are evaluated in an
+        // order the compiler picks, so draws inside frag(...) gave other
+        // scenes under clang than under g++. Kept in g++'s order (last first).
+        const float a = 0.05f + 0.95f * u(rng), b = u(rng), g = u(rng), r = u(rng), z = 0.05f + 0.9f * u(rng);
+        fs.push_back(frag(uint16_t(x), uint16_t(y), z, r, g, b, a, kTranspDraw, prim++));
+      }
     }
   std::shuffle(fs.begin(), fs.end(), rng);
   return fs;

@@ -76,7 +76,9 @@ MergeStats mergeProperty(StorageFormat fmt, unsigned k, uint32_t seed) {
     algo->clear(w.data());
     const int n = 2 + int(rng() % 20);
     for (int i = 0; i < n; ++i) {
-      const Fragment f = frag(0, 0, u(rng), u(rng), u(rng), u(rng), 0.02f + 0.96f * u(rng));
+      // One draw per declarator, in g++'s order of the arguments they were once (AlgoTestUtil.hpp).
+      const float a = 0.02f + 0.96f * u(rng), b = u(rng), g = u(rng), r = u(rng), z = u(rng);
+      const Fragment f = frag(0, 0, z, r, g, b, a);
       std::vector<LayerRow> rows;
       for (unsigned j = 0; j < k; ++j) rows.push_back(decodeRow(fmt, w.data() + j * rw));
       // Bubble position (tie rule f.z <= z); a row in front of it keeps its

@@ -49,7 +49,11 @@ inline std::vector<Fragment> smallScene(uint32_t w, uint32_t h, unsigned max_dep
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (uint32_t y = 0; y < h; ++y)
-    for (uint32_t x = 0; x < w * 2 / 3; ++x) fs.push_back(frag(uint16_t(x), uint16_t(y), 0.5f + 0.5f * u(rng), u(rng), u(rng), u(rng), 1.0f, kOpaqueDraw));
+    for (uint32_t x = 0; x < w * 2 / 3; ++x) {
+      // One draw per declarator, in g++'s order of the arguments they were once (AlgoTestUtil.hpp).
+      const float b = u(rng), g = u(rng), r = u(rng), z = 0.5f + 0.5f * u(rng);
+      fs.push_back(frag(uint16_t(x), uint16_t(y), z, r, g, b, 1.0f, kOpaqueDraw));
+    }
   auto tr = randomScene(w, h, max_depth, seed + 1);
   for (size_t i = 0; i < tr.size(); ++i) {
     tr[i].draw = (i % 3 == 0) ? kTranspDraw2 : kTranspDraw;

@@ -12,6 +12,13 @@
 
 namespace oit::gen::scene_impl {
 
+// Every random draw is a statement of its own (or one declarator, or one element
+// of a braced list, which C++ sequences): the order in which one expression's
+// operands or a call's arguments are evaluated is left to the compiler (g++
+// goes right to left, clang left to right), so two draws in one call made the
+// generated traces differ between compilers. The order kept is the one g++
+// drew in, so the traces, and every figure made from them, stay as committed
+// (tests/traces/test_generator_golden.cpp holds each scene's fingerprint).
 using Plan = ScenePlan;
 
 // Camera-facing quads (two triangles sharing the diagonal) scattered in a ball, in
@@ -28,9 +35,13 @@ void addParticles(Plan& p, const std::string& name, const ParticleParams& pp) {
     for (uint32_t i = 0; i < pp.count; ++i) {
       const Vec3 c = pp.centre + inBall(rng, pp.radius);
       const float s = rng.uniformf(pp.size_min, pp.size_max);
-      const std::array<float, 3> col =
-          o.colour ? *o.colour
-                   : hsv(rng.uniform(), rng.uniform(0.55, 0.95), rng.uniform(0.75, 1.0));
+      std::array<float, 3> col;
+      if (o.colour) {
+        col = *o.colour;
+      } else {  // value, saturation, hue: the draws one by one (the header comment)
+        const double v = rng.uniform(0.75, 1.0), sat = rng.uniform(0.55, 0.95);
+        col = hsv(rng.uniform(), sat, v);
+      }
       const Vec3 r = right * s, u = up * s;
       const ClipVertex v[4] = {clipVertex(vp, c - r - u, {-1, -1}), clipVertex(vp, c + r - u, {1, -1}),
                                clipVertex(vp, c + r + u, {1, 1}), clipVertex(vp, c - r + u, {-1, 1})};
@@ -77,7 +88,10 @@ void addHair(Plan& p, uint32_t strands) {
       const Clump& k = clumps[s % kClumps];
       const Vec3 root = k.root + inDiscXZ(rng, 0.28f);
       const Vec3 knot = k.knot + inDiscXZ(rng, 0.012f);
-      const Vec3 tip = k.tip + inDiscXZ(rng, 0.32f) + Vec3{0, rng.uniformf(-0.08, 0.08), 0};
+      // Drawn one by one: the order of draws inside one expression is the
+      // compiler's choice (SceneContent's header comment).
+      const float tip_dy = rng.uniformf(-0.08, 0.08);
+      const Vec3 tip = k.tip + inDiscXZ(rng, 0.32f) + Vec3{0, tip_dy, 0};
       const float phase = rng.uniformf(0, 2 * kPi), wave = rng.uniformf(0.01, 0.03);
       const float half_px = rng.uniformf(0.5, 1.0);  // ribbon 1-2 px wide
       const float tint = rng.uniformf(0.8, 1.2);
@@ -169,7 +183,8 @@ void addFoliage(Plan& p, uint32_t cards) {
     const float alpha_scale = o.alpha.value_or(1.0f);
     for (uint32_t i = 0; i < cards; ++i) {
       const Vec3& tip = tips[rng.below(kBranches)];
-      const Vec3 pos = lerp(base_pt, tip, rng.uniformf(0.35, 1.0)) + inBall(rng, 0.12f);
+      const Vec3 jitter = inBall(rng, 0.12f);
+      const Vec3 pos = lerp(base_pt, tip, rng.uniformf(0.35, 1.0)) + jitter;
       const float len = rng.uniformf(0.16, 0.30), wid = 0.6f * len;
       const Vec3 axis = normalize(normalize(tip - base_pt) + inBall(rng, 0.8f));
       Vec3 n = normalize(cross(axis, inBall(rng, 1.0f) + Vec3{0.01f, 0, 0}));
@@ -223,9 +238,12 @@ void addGlass(Plan& p, uint32_t panes) {
       const Vec3 ty{std::sin(yaw) * std::sin(pitch), std::cos(pitch), std::cos(yaw) * std::sin(pitch)};
       pn.s = sx * rng.uniformf(0.55, 0.9);
       pn.t = ty * rng.uniformf(0.45, 0.75);
-      pn.colour = o.colour ? *o.colour
-                           : hsv((i + rng.uniform(0, 0.5)) / panes, rng.uniform(0.7, 0.95),
-                                 rng.uniform(0.85, 1.0));
+      if (o.colour) {
+        pn.colour = *o.colour;
+      } else {  // value, saturation, hue: the draws one by one (the header comment)
+        const double v = rng.uniform(0.85, 1.0), sat = rng.uniform(0.7, 0.95);
+        pn.colour = hsv((i + rng.uniform(0, 0.5)) / panes, sat, v);
+      }
       pn.alpha = o.alpha.value_or(rng.uniformf(0.3, 0.5));
       for (float& s : pn.shade) s = rng.uniformf(0.75, 1.0);  // per-corner tint
     }

@@ -28,10 +28,12 @@ namespace {
 // room for the few refusals and for what the approximate engine still
 // approximates (the ALU's slots by time, the stages' order within a cycle).
 // In lockstep (quantum 1): how the two partitions interleave on the shared
-// l2 is not what this compares. Measured: 223 against 222 (g++ Release), 223
-// against 220 (the clang sanitizer build); at the default quantum of 16 222
-// against 219 and 225 against 219 (+2.7 %), at 200 221 against 220. (That
-// the two builds count differently, the cycle engine too, is not analysed.)
+// l2 is not what this compares. Measured: 223 against 222, in the g++ and the
+// clang builds alike. (The clang builds once counted 220 for the cycle engine:
+// the scene was another one there, its random draws sitting in one call's
+// arguments, whose order of evaluation is the compiler's; RopTestUtil.hpp,
+// tests/model/test_same_on_every_compiler.cpp.) At the default quantum of 16
+// and at 200 the counts were within 2.7 % (before that fix).
 // (On the DRAM-bound 32 KiB cache: 2,863 against 5,948.)
 TEST(ApproximateLockConflicts, SameAsTheCycleEngineWhenNothingWaitsAtThePort) {
   const MlabAgreementScene s;
