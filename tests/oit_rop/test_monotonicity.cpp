@@ -22,8 +22,9 @@
 // wall, cycle engine: from 0.44 % faster to 0.20 % slower over ten seeds,
 // 0.11 % faster on the mean). One run per step samples that roughness, not
 // the step. So every step is judged on the mean frame over perturbed runs of
-// the base and of the step, seven for a DRAM step, three for the others
-// (DESIGN.md, "Monotonicity of the DRAM steps" and "... of the other steps").
+// the base and of the step, seven for a DRAM step, three for the others (or
+// one, when it is clearly slower: below) (DESIGN.md, "Monotonicity of the
+// DRAM steps" and "... of the other steps").
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -140,7 +141,7 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"lock.granularity", "quad"},
       {"lock.granularity", "tile"},
       {"lock.release", "end_of_shader"},
-      {"lock.shader_tail", "40"},
+      {"lock.shader_tail", "40"},  // moves no frame: the base releases at the blend, not at the shader's end
       {"cache.size_bytes", "4KiB"},
       {"cache.ways", "4"},
       {"cache.miss_queue", "8"},
@@ -155,7 +156,7 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"l2.hit_latency", "100"},
       {"l2.bytes_per_clock", "8"},
       {"l3.size_bytes", "128KiB"},
-      {"l3.ways", "8"},
+      {"l3.ways", "8"},  // moves no frame: the working set fits in 8 ways too
       {"l3.hit_latency", "160"},
       {"l3.bytes_per_clock", "20"},
       {"dram.channels", "1"},
@@ -217,22 +218,25 @@ std::string missesAndBytes(const ChildRun& x) {
          ", lock waits " + std::to_string(x.stats["lock"]["wait_cycles"].get<uint64_t>());
 }
 
-// A configuration's perturbed runs on the scene (`dram`: from the DRAM base).
-std::vector<ChildRun> perturbedRuns(const Scene& sc, const model::AlgorithmParams& p, const RopConfig& c, bool dram) {
+// A configuration's perturbed runs k = first, first + 1, ... (at most
+// `count`) on the scene (`dram`: from the DRAM base).
+std::vector<ChildRun> perturbedRuns(const Scene& sc, const model::AlgorithmParams& p, const RopConfig& c, bool dram,
+                                    unsigned first = 0, unsigned count = ~0u) {
   std::vector<RopConfig> cfgs;
-  for (unsigned k = 0; k < perturbationsOf(dram); ++k) cfgs.push_back(perturbed(c, dram, k));
+  for (unsigned k = first; k < perturbationsOf(dram) && k - first < count; ++k) cfgs.push_back(perturbed(c, dram, k));
   return runEachInAChild(sc, p, cfgs);
 }
 
-double meanOf(const std::vector<ChildRun>& runs, double (*of)(const ChildRun&)) {
+// The mean of a statistic over the first n runs.
+double meanOf(const std::vector<ChildRun>& runs, size_t n, double (*of)(const ChildRun&)) {
   double sum = 0;
-  for (const ChildRun& r : runs) sum += of(r);
-  return sum / double(runs.size());
+  for (size_t k = 0; k < n; ++k) sum += of(runs[k]);
+  return sum / double(n);
 }
 
-// A step's perturbed runs against its base's (paired by perturbation): how
-// much faster the step's mean frame is (negative: slower), each pair's change
-// for the messages, and whether any run's frame moved at all.
+// A step's perturbed runs against its base's first as many (paired by
+// perturbation): how much faster the step's mean frame is (negative: slower),
+// each pair's change for the messages, and whether any run's frame moved.
 struct StepChange {
   double faster = 0;
   std::string each;
@@ -246,7 +250,7 @@ StepChange changeOf(const std::vector<ChildRun>& base, const std::vector<ChildRu
     s.each += ' ';
     s.each += std::to_string(100.0 * (c / b - 1)).substr(0, 5);
   }
-  s.faster = 1 - meanOf(step, frameCyclesOf) / meanOf(base, frameCyclesOf);
+  s.faster = 1 - meanOf(step, step.size(), frameCyclesOf) / meanOf(base, step.size(), frameCyclesOf);
   return s;
 }
 
@@ -272,8 +276,20 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
     for (const auto& [path, value] : worseSteps()) {
       const bool dram = isDramStep(path);
       const std::vector<ChildRun>& base = dram ? dram_refs : refs;
-      const std::vector<ChildRun> runs = perturbedRuns(sc, p, configWith(GetParam(), dram, path, value), dram);
+      const RopConfig worse = configWith(GetParam(), dram, path, value);
+      // A step not of the DRAM whose first run is 0.5 % slower than the base's
+      // is judged on that run: the mean of three would be faster by 0.5 % only
+      // if the other two runs were 1 % faster on average, four standard
+      // deviations of a run's change (0.25 %). That spares 37-41 of the 84
+      // step-scene pairs per engine their other runs (DESIGN.md).
+      std::vector<ChildRun> runs = perturbedRuns(sc, p, worse, dram, 0, dram ? ~0u : 1u);
       for (const ChildRun& r : runs) ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value;
+      if (!dram && frameCyclesOf(runs[0]) < 1.005 * frameCyclesOf(base[0])) {
+        for (ChildRun& r : perturbedRuns(sc, p, worse, dram, 1)) {
+          ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value;
+          runs.push_back(std::move(r));
+        }
+      }
       const StepChange s = changeOf(base, runs);
       if (dram && s.moved) dram_steps_that_moved.insert(path + "=" + value);
       if (s.faster > worst) {
@@ -304,7 +320,7 @@ TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
       // cache sees the same accesses whatever the scoreboard and the shader
       // latency: the first two slow its frames (0.1-0.7 %).
       if ((path == "lock.capacity" || path == "input.latency_max" || path == "cache.ways") && s.faster > 0.005) {
-        const double fell = 1 - meanOf(runs, ropCacheMissesOf) / meanOf(base, ropCacheMissesOf);
+        const double fell = 1 - meanOf(runs, runs.size(), ropCacheMissesOf) / meanOf(base, runs.size(), ropCacheMissesOf);
         EXPECT_LE(s.faster, fell + 0.005) << what << "; the ROP cache's mean misses " << 100 * fell << " % fewer";
         continue;
       }
