@@ -3,23 +3,28 @@
 // longer latencies, coarser lock, end-of-shader release, smaller queues; the
 // DRAM controller's timings, activate limits, turnarounds, refresh, write
 // queue and scheduler too) on three scenes; no frame may get faster by more
-// than 0.5 % (a smaller scoreboard only by cutting the ROP cache's thrashing,
-// below). The base is iris-pro-5200 with its caches scaled to the scenes (an
-// 8 KiB ROP cache, a 64 KiB l2, a 256 KiB victim l3), so that every level is
-// exercised. The l3 holds each scene's whole working set (96 x 64 x 32 B of
-// arrays plus depth and colour: about 250 KB), so no byte reaches DRAM from
-// that base: the DRAM steps are taken from the same base without the l3 (the
-// l2's misses go to DRAM), and each of them must move at least one scene's
-// frame (with the l3 none of the 18 did: the steps could not fail).
+// than 0.5 % (three steps that cut the ROP cache's misses only by what the
+// misses explain, below). The base is iris-pro-5200 with its caches scaled
+// to the scenes (an 8 KiB ROP cache, a 64 KiB l2, a 256 KiB victim l3), so
+// that every level is exercised. The l3 holds each scene's whole working set
+// (96 x 64 x 32 B of arrays plus depth and colour: about 250 KB), so no byte
+// reaches DRAM from that base: the DRAM steps are taken from the same base
+// without the l3 (the l2's misses go to DRAM), and each of them must move at
+// least one scene's frame (with the l3 none of the 18 did: the steps could
+// not fail).
 //
-// From that DRAM base the frames are rough functions of the DRAM's timing: a
-// change far below any step's own cost (input.seed, or dram.controller_ns
-// 0.1 ns = 0.115 cycles longer) moves a frame by 0.6-1.0 % (standard
-// deviation over ten seeds), faster as often as slower, with the cycle
-// engine in lockstep (sim.quantum_cycles 1) too. One run per step samples
-// that roughness, not the step. So a DRAM step is judged on the mean frame
-// over kPerturbations perturbed runs of the base and of the step (DESIGN.md,
-// "Monotonicity of the DRAM steps").
+// A frame is a rough function of small changes: from the DRAM base a change
+// far below any step's own cost (input.seed, or dram.controller_ns 0.1 ns =
+// 0.115 cycles longer) moves a frame by 0.6-1.0 % (standard deviation over
+// ten seeds), faster as often as slower, with the cycle engine in lockstep
+// (sim.quantum_cycles 1) too; from the l3 base another input.seed moves a
+// step's change by up to 0.25 % (alu.base_latency 16 on particles over the
+// wall, cycle engine: from 0.44 % faster to 0.20 % slower over ten seeds,
+// 0.11 % faster on the mean). One run per step samples that roughness, not
+// the step. So every step is judged on the mean frame over perturbed runs of
+// the base and of the step, seven for a DRAM step, three for the others (or
+// one, when it is clearly slower: below) (DESIGN.md, "Monotonicity of the
+// DRAM steps" and "... of the other steps").
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -79,18 +84,28 @@ const std::vector<Scene>& scenes() {
 // A step of the DRAM controller's: taken from the base without the l3.
 bool isDramStep(const std::string& path) { return path.rfind("dram.", 0) == 0; }
 
-// The perturbed runs a DRAM step and its base are each measured over: run k
-// with input.seed 1 + k (the shader latencies) and the DRAM controller's
-// latency 0.1 (k - 3) ns off the configuration's (at most 0.3 ns, 0.35 core
-// cycles: a quarter of the smallest step, one tCK of 1.25 ns on one timing).
-// Seven: over ten seeds one run's change has a standard deviation of up to
-// 0.97 %, so the mean of seven is within about 0.37 % of the step's own
-// effect (one standard error); measured at the change, the worst mean of a
+// The perturbed runs a step and its base are each measured over: run k with
+// input.seed 1 + k (other draws of the same shader-latency distribution: no
+// cost of its own) and, from the DRAM base, the DRAM controller's latency
+// 0.1 (k - 3) ns off the configuration's (at most 0.3 ns, 0.35 core cycles: a
+// quarter of the smallest step, one tCK of 1.25 ns on one timing). The l3
+// base moves no DRAM byte, and a whole cycle more of any latency would be a
+// step itself, so there the seed alone is the perturbation.
+// DRAM steps: seven. Over ten seeds one run's change has a standard deviation
+// of up to 0.97 %, so the mean of seven is within about 0.37 % of the step's
+// own effect (one standard error); measured at the change, the worst mean of a
 // step was 0.15 % faster (DESIGN.md).
-constexpr unsigned kPerturbations = 7;
-RopConfig perturbed(RopConfig c, unsigned k) {
+// The other steps: three. From the l3 base one run's change has a standard
+// deviation of at most 0.25 % over ten seeds (the steps within 2 % of the
+// base; cycle engine, particles over the wall; 0.16 % on the approximate
+// engine, whose frames hardly answer the seed), so the mean of three is within
+// about 0.15 % of the step's own effect.
+constexpr unsigned kDramPerturbations = 7;
+constexpr unsigned kPerturbations = 3;
+unsigned perturbationsOf(bool dram) { return dram ? kDramPerturbations : kPerturbations; }
+RopConfig perturbed(RopConfig c, bool dram, unsigned k) {
   c.input.seed = 1 + k;
-  c.dram.controller_ns += 0.1 * (double(k) - 3.0);
+  if (dram) c.dram.controller_ns += 0.1 * (double(k) - 3.0);
   return c;
 }
 
@@ -126,7 +141,7 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"lock.granularity", "quad"},
       {"lock.granularity", "tile"},
       {"lock.release", "end_of_shader"},
-      {"lock.shader_tail", "40"},
+      {"lock.shader_tail", "40"},  // moves no frame: the base releases at the blend, not at the shader's end
       {"cache.size_bytes", "4KiB"},
       {"cache.ways", "4"},
       {"cache.miss_queue", "8"},
@@ -141,7 +156,7 @@ const std::vector<std::pair<std::string, std::string>>& worseSteps() {
       {"l2.hit_latency", "100"},
       {"l2.bytes_per_clock", "8"},
       {"l3.size_bytes", "128KiB"},
-      {"l3.ways", "8"},
+      {"l3.ways", "8"},  // moves no frame: the working set fits in 8 ways too
       {"l3.hit_latency", "160"},
       {"l3.bytes_per_clock", "20"},
       {"dram.channels", "1"},
@@ -195,6 +210,7 @@ uint64_t dramBytesOf(const ChildRun& x) {
          x.stats["memory"]["dram_write_bytes"]["total"].get<uint64_t>();
 }
 double frameCyclesOf(const ChildRun& x) { return double(x.stats["timing"]["cycles"].get<uint64_t>()); }
+double ropCacheMissesOf(const ChildRun& x) { return double(x.stats["cache"]["misses"].get<uint64_t>()); }
 std::string missesAndBytes(const ChildRun& x) {
   const auto& m = x.stats["memory"];
   return "cache misses " + std::to_string(x.stats["cache"]["misses"].get<uint64_t>()) + ", l2 misses " +
@@ -202,100 +218,113 @@ std::string missesAndBytes(const ChildRun& x) {
          ", lock waits " + std::to_string(x.stats["lock"]["wait_cycles"].get<uint64_t>());
 }
 
+// A configuration's perturbed runs k = first, first + 1, ... (at most
+// `count`) on the scene (`dram`: from the DRAM base).
+std::vector<ChildRun> perturbedRuns(const Scene& sc, const model::AlgorithmParams& p, const RopConfig& c, bool dram,
+                                    unsigned first = 0, unsigned count = ~0u) {
+  std::vector<RopConfig> cfgs;
+  for (unsigned k = first; k < perturbationsOf(dram) && k - first < count; ++k) cfgs.push_back(perturbed(c, dram, k));
+  return runEachInAChild(sc, p, cfgs);
+}
+
+// The mean of a statistic over the first n runs.
+double meanOf(const std::vector<ChildRun>& runs, size_t n, double (*of)(const ChildRun&)) {
+  double sum = 0;
+  for (size_t k = 0; k < n; ++k) sum += of(runs[k]);
+  return sum / double(n);
+}
+
+// A step's perturbed runs against its base's first as many (paired by
+// perturbation): how much faster the step's mean frame is (negative: slower),
+// each pair's change for the messages, and whether any run's frame moved.
+struct StepChange {
+  double faster = 0;
+  std::string each;
+  bool moved = false;
+};
+StepChange changeOf(const std::vector<ChildRun>& base, const std::vector<ChildRun>& step) {
+  StepChange s;
+  for (size_t k = 0; k < step.size(); ++k) {
+    const double c = frameCyclesOf(step[k]), b = frameCyclesOf(base[k]);
+    s.moved = s.moved || c != b;
+    s.each += ' ';
+    s.each += std::to_string(100.0 * (c / b - 1)).substr(0, 5);
+  }
+  s.faster = 1 - meanOf(step, step.size(), frameCyclesOf) / meanOf(base, step.size(), frameCyclesOf);
+  return s;
+}
+
 TEST_P(Monotonicity, NoResourceOneStepWorseMakesAFrameFaster) {
   model::AlgorithmParams p;
   p.layers = 4;
   p.format = model::StorageFormat::Rgba8T8Z32;
-  double worst = -1;  // the largest speed-up any step gave (negative: every step slowed the frame)
+  double worst = -1;  // the largest speed-up of a mean frame any step gave (negative: every step slowed it)
   std::string worst_what;
   std::set<std::string> dram_steps_that_moved;
   for (const Scene& sc : scenes()) {
-    // The base with the l3 (no DRAM byte), and the DRAM base's perturbed runs.
-    const ChildRun ref = runInChild([&] { return timed("mlab", p, sc.fs, sc.w, sc.h, configWith(GetParam(), false)); });
-    ASSERT_TRUE(ref.ok) << ref.error;
-    EXPECT_EQ(dramBytesOf(ref), 0u) << sc.name;
-    std::vector<RopConfig> dram_base;
-    for (unsigned k = 0; k < kPerturbations; ++k) dram_base.push_back(perturbed(configWith(GetParam(), true), k));
-    const std::vector<ChildRun> dram_refs = runEachInAChild(sc, p, dram_base);
+    // The perturbed runs of the base with the l3 (no DRAM byte) and of the DRAM base.
+    const std::vector<ChildRun> refs = perturbedRuns(sc, p, configWith(GetParam(), false), false);
+    const std::vector<ChildRun> dram_refs = perturbedRuns(sc, p, configWith(GetParam(), true), true);
+    for (const ChildRun& r : refs) {
+      ASSERT_TRUE(r.ok) << sc.name;
+      EXPECT_EQ(dramBytesOf(r), 0u) << sc.name;
+    }
     for (const ChildRun& r : dram_refs) {
       ASSERT_TRUE(r.ok) << sc.name;
       EXPECT_GT(dramBytesOf(r), 0u) << sc.name;
     }
     for (const auto& [path, value] : worseSteps()) {
-      const RopConfig worse = configWith(GetParam(), isDramStep(path), path, value);
-      if (isDramStep(path)) {
-        // The mean frame over the perturbed runs, the step's against the base's.
-        std::vector<RopConfig> cfgs;
-        for (unsigned k = 0; k < kPerturbations; ++k) cfgs.push_back(perturbed(worse, k));
-        const std::vector<ChildRun> runs = runEachInAChild(sc, p, cfgs);
-        double sum = 0, base_sum = 0;
-        std::string each;  // each run's change, for the message
-        for (unsigned k = 0; k < kPerturbations; ++k) {
-          ASSERT_TRUE(runs[k].ok) << sc.name << " " << path << "=" << value;
-          const double c = frameCyclesOf(runs[k]), b = frameCyclesOf(dram_refs[k]);
-          if (c != b) dram_steps_that_moved.insert(path + "=" + value);
-          sum += c;
-          base_sum += b;
-          each += " " + std::to_string(100.0 * (c / b - 1)).substr(0, 5);
+      const bool dram = isDramStep(path);
+      const std::vector<ChildRun>& base = dram ? dram_refs : refs;
+      const RopConfig worse = configWith(GetParam(), dram, path, value);
+      // A step not of the DRAM whose first run is 0.5 % slower than the base's
+      // is judged on that run: the mean of three would be faster by 0.5 % only
+      // if the other two runs were 1 % faster on average, four standard
+      // deviations of a run's change (0.25 %). That spares 37-41 of the 84
+      // step-scene pairs per engine their other runs (DESIGN.md).
+      std::vector<ChildRun> runs = perturbedRuns(sc, p, worse, dram, 0, dram ? ~0u : 1u);
+      for (const ChildRun& r : runs) ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value;
+      if (!dram && frameCyclesOf(runs[0]) < 1.005 * frameCyclesOf(base[0])) {
+        for (ChildRun& r : perturbedRuns(sc, p, worse, dram, 1)) {
+          ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value;
+          runs.push_back(std::move(r));
         }
-        const double faster = 1 - sum / base_sum;
-        if (faster > worst) {
-          worst = faster;
-          worst_what = sc.name + " " + path + "=" + value + " (mean of " + std::to_string(kPerturbations) + ")";
-        }
-        EXPECT_GE(sum, base_sum * 0.995) << sc.name << ": " << path << " = " << value << " made the mean frame "
-                                         << 100.0 * faster << " % faster (each run's change, %:" << each
-                                         << "; first run " << missesAndBytes(runs[0]) << " against " << missesAndBytes(dram_refs[0]) << ")";
+      }
+      const StepChange s = changeOf(base, runs);
+      if (dram && s.moved) dram_steps_that_moved.insert(path + "=" + value);
+      if (s.faster > worst) {
+        worst = s.faster;
+        worst_what = sc.name + " " + path + "=" + value + " (mean of " + std::to_string(runs.size()) + ")";
+      }
+      const std::string what = sc.name + ": " + path + " = " + value + " made the mean frame " +
+                               std::to_string(100.0 * s.faster) + " % faster (each run's change, %:" + s.each +
+                               "; first run " + missesAndBytes(runs[0]) + " against " + missesAndBytes(base[0]) + ")";
+      // The exceptions, judged on the means too: three steps that cut the
+      // ROP cache's misses. These frames are bound by those misses' fills from
+      // the l2 (bound_by l2), so each may be faster by more than 0.5 % only
+      // with fewer misses on the mean, and by at most 0.5 % more than they
+      // fell (DESIGN.md, "Monotonicity of the other steps"; ten seeds):
+      // - a smaller scoreboard holds fewer fragments in flight, so fewer lines
+      //   compete for the small ROP cache (cycle engine, particles: misses
+      //   1.7 % fewer, the frame 0.76 % faster; DESIGN.md, PixelLock: "a larger
+      //   scoreboard can make a frame slower when the cache is small");
+      // - a longer shader latency (40-240 cycles instead of 40-120) keeps about
+      //   19 more of the scoreboard's entries in the shader, the same as a
+      //   smaller scoreboard (cycle engine, particles: misses 0.4 % fewer, the
+      //   frame 0.71 % faster; with a scoreboard of 272, 0.34 %);
+      // - 4 ways instead of 8 (twice the sets) hit more of the accesses a
+      //   fully associative LRU cache misses: LRU is not monotone in the ways
+      //   (approximate engine, particles over the wall: misses 18,167 ->
+      //   18,074 on every seed, the frame 0.54 % faster).
+      // The approximate engine visits fragments in issue order, so its ROP
+      // cache sees the same accesses whatever the scoreboard and the shader
+      // latency: the first two slow its frames (0.1-0.7 %).
+      if ((path == "lock.capacity" || path == "input.latency_max" || path == "cache.ways") && s.faster > 0.005) {
+        const double fell = 1 - meanOf(runs, runs.size(), ropCacheMissesOf) / meanOf(base, runs.size(), ropCacheMissesOf);
+        EXPECT_LE(s.faster, fell + 0.005) << what << "; the ROP cache's mean misses " << 100 * fell << " % fewer";
         continue;
       }
-      const double base_cycles = frameCyclesOf(ref);
-      const auto r = runInChild([&] { return timed("mlab", p, sc.fs, sc.w, sc.h, worse); });
-      ASSERT_TRUE(r.ok) << sc.name << " " << path << "=" << value << ": " << r.error;
-      const double cycles = frameCyclesOf(r);
-      const double faster = 1 - cycles / base_cycles;
-      if (faster > worst) {
-        worst = faster;
-        worst_what = sc.name + " " + path + "=" + value;
-      }
-      // The one documented exception: a smaller scoreboard holds fewer
-      // fragments in flight, so fewer lines compete for a small ROP cache
-      // (DESIGN.md, PixelLock: "a larger scoreboard can make a frame slower
-      // when the cache is small"). It may make a frame faster, but only with
-      // fewer ROP-cache misses, and by no more than they fell.
-      if (path == "lock.capacity" && faster > 0.005) {
-        const double misses = double(r.stats["cache"]["misses"].get<uint64_t>());
-        const double base_misses = double(ref.stats["cache"]["misses"].get<uint64_t>());
-        EXPECT_LE(faster, 1 - misses / base_misses) << sc.name << ": a smaller scoreboard " << 100 * faster
-                                                    << " % faster, ROP-cache misses " << misses << " against "
-                                                    << base_misses;
-        continue;
-      }
-      // The second exception (issue 22, inserts cost their work): a wider
-      // shader-latency spread spaces a pixel's fragments further apart, so in a
-      // lock-bound frame fewer of them wait for the one before (particles, cycle
-      // engine: lock waits 1,033,411 -> 861,073, the frame 0.54 % faster). Only
-      // with fewer lock waits, and by under 1 %.
-      if (path == "input.latency_max" && faster > 0.005) {
-        EXPECT_LT(r.stats["lock"]["wait_cycles"].get<double>(), ref.stats["lock"]["wait_cycles"].get<double>())
-            << sc.name;
-        EXPECT_LT(faster, 0.01) << sc.name << ": " << missesAndBytes(r) << " against " << missesAndBytes(ref);
-        continue;
-      }
-      // The third exception (issue 21, the approximate engine's in-order early
-      // depth): the same ROP cache in 4 ways instead of 8 (twice the sets)
-      // missed less on particles over the wall (18,074 against 18,167 misses)
-      // and the approximate engine's frame came out 0.63 % faster (the cycle
-      // engine's under 0.5 %): fewer ways with more sets is not always worse
-      // for LRU. Only with fewer ROP-cache misses, and by under 1 %.
-      if (path == "cache.ways" && faster > 0.005) {
-        EXPECT_LT(r.stats["cache"]["misses"].get<double>(), ref.stats["cache"]["misses"].get<double>()) << sc.name;
-        EXPECT_LT(faster, 0.01) << sc.name << ": " << missesAndBytes(r) << " against " << missesAndBytes(ref);
-        continue;
-      }
-      EXPECT_GE(cycles, base_cycles * 0.995)
-          << sc.name << ": " << path << " = " << value << " made the frame " << 100.0 * (1 - cycles / base_cycles)
-          << " % faster (" << cycles << " against " << base_cycles << " cycles; " << missesAndBytes(r) << " against "
-          << missesAndBytes(ref) << ")";
+      EXPECT_LE(s.faster, 0.005) << what;
     }
   }
   RecordProperty("largest_speedup_percent", std::to_string(100 * worst) + " (" + worst_what + ")");
