@@ -85,6 +85,13 @@ const std::vector<GoldenRun>& goldenRuns() {
                  with(kDramOnly, {"dram.open_row=false", "sim.engine=cycle"})});
     v.push_back({"iris_mlab_unordered_cycle_small", Scene::Small64, iris, "mlab",
                  {"lock.mode=unordered", "sim.engine=cycle"}});
+    // The GDDR presets' DRAM (their l2s hold this frame whole: 1,300-1,450
+    // cycles, no DRAM byte), without their shared levels: GDDR5 and GDDR6
+    // timings, refresh and activate limits on both engines.
+    for (const auto& [short_name, preset] : {presets[1], presets[2]})
+      for (const char* engine : {"cycle", "approximate"})
+        v.push_back({std::string(short_name) + "_mlab_dram_only_" + engine, Scene::Demo160, preset, "mlab",
+                     with(kDramOnly, {std::string("sim.engine=") + engine})});
     return v;
   }();
   return runs;
