@@ -1,5 +1,5 @@
 // Golden-file regression tests of the timing model (trace-player tests against
-// golden files): 14 small runs, each a preset, an algorithm, an engine and a
+// golden files): 18 small runs, each a preset, an algorithm, an engine and a
 // few settings over a fixed scene, whose whole timing statistics, outcome
 // counts and a 64-bit hash of the image's bits must equal what
 // tests/data/golden/<run>.json holds.
