@@ -1,5 +1,5 @@
 // Golden-file regression tests of the timing model (trace-player tests against
-// golden files): 18 small runs, each a preset, an algorithm, an engine and a
+// golden files): 22 small runs, each a preset, an algorithm, an engine and a
 // few settings over a fixed scene, whose whole timing statistics, outcome
 // counts and a 64-bit hash of the image's bits must equal what
 // tests/data/golden/<run>.json holds.
@@ -85,6 +85,14 @@ const std::vector<GoldenRun>& goldenRuns() {
                  with(kDramOnly, {"dram.open_row=false", "sim.engine=cycle"})});
     v.push_back({"iris_mlab_unordered_cycle_small", Scene::Small64, iris, "mlab",
                  {"lock.mode=unordered", "sim.engine=cycle"}});
+    // The lock without order (its image is the race's, counted) and coarser
+    // scopes, and the l2 as a victim cache of the ROP caches.
+    v.push_back({"iris_mlab_lock_none_cycle_small", Scene::Small64, iris, "mlab", {"lock.mode=none", "sim.engine=cycle"}});
+    v.push_back({"iris_mlab_quad_lock_cycle", Scene::Demo160, iris, "mlab",
+                 {"lock.granularity=quad", "sim.engine=cycle"}});
+    v.push_back({"iris_mlab_tile_lock_approximate", Scene::Demo160, iris, "mlab",
+                 {"lock.granularity=tile", "sim.engine=approximate"}});
+    v.push_back({"iris_mlab_victim_l2_cycle", Scene::Demo160, iris, "mlab", {"l2.victim_only=true", "sim.engine=cycle"}});
     // The GDDR presets' DRAM (their l2s hold this frame whole: 1,300-1,450
     // cycles, no DRAM byte), without their shared levels: GDDR5 and GDDR6
     // timings, refresh and activate limits on both engines.
