@@ -8,8 +8,8 @@
 // fingerprints are g++'s, the ones the committed stress table was made with.
 #include <gtest/gtest.h>
 
-#include <cstring>
 
+#include "Fnv1a.hpp"
 #include "model/AlgoTestUtil.hpp"
 #include "model/StressSuite.hpp"
 
@@ -20,20 +20,12 @@ using namespace oit::model::stress;
 namespace {
 
 // FNV-1a over the fragments' bytes (Fragment has no padding: 32 bytes).
-uint64_t fingerprint(const std::vector<Fragment>& fs, uint64_t h = 0xcbf29ce484222325ull) {
-  for (const Fragment& f : fs) {
-    unsigned char bytes[sizeof(Fragment)];
-    std::memcpy(bytes, &f, sizeof f);
-    for (unsigned char b : bytes) {
-      h ^= b;
-      h *= 0x100000001b3ull;
-    }
-  }
-  return h;
+uint64_t fingerprint(const std::vector<Fragment>& fs, uint64_t h = test::kFnv1aOffset) {
+  return test::fnv1a64(fs.data(), fs.size() * sizeof(Fragment), h);
 }
 
 TEST(SameOnEveryCompiler, StressCases) {
-  uint64_t h = 0xcbf29ce484222325ull;
+  uint64_t h = test::kFnv1aOffset;
   size_t n = 0;
   for (const std::string& name : caseNames()) {
     const StressCase c = makeCase(name);

@@ -18,11 +18,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "Fnv1a.hpp"
 #include "model/MemorySource.hpp"
 #include "oit_rop/RopTestUtil.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
 #include "traces/AtomicFile.hpp"
 #include "traces/gen/Scenes.hpp"
+#include "traces/test_gen_util.hpp"
 
 using namespace oit;
 using namespace oit::rop;
@@ -105,13 +107,6 @@ const std::vector<GoldenRun>& goldenRuns() {
   return runs;
 }
 
-struct VectorSink : FragmentSink {
-  std::vector<Fragment> fs;
-  void write(const Fragment& f) override { fs.push_back(f); }
-  void commit() override {}
-  uint64_t written() const override { return fs.size(); }
-};
-
 std::string sceneName(Scene s) {
   return s == Scene::Demo160 ? "oitsim gen demo --width 160 --height 120 --seed 1"
                              : "smallScene(64, 48, 12, 5) (tests/oit_rop/RopTestUtil.hpp)";
@@ -129,9 +124,9 @@ TimingResult simulate(const GoldenRun& run) {
     o.width = 160;
     o.height = 120;
     o.seed = 1;
-    VectorSink sink;
+    test::VectorSink sink;
     gen::generateScene("demo", o, sink);
-    model::MemorySource src(gen::sceneHeader("demo", o), std::move(sink.fs), 1 << 12);
+    model::MemorySource src(gen::sceneHeader("demo", o), std::move(sink.fragments), 1 << 12);
     return runTiming(src, *algo, cfg, {});
   }
   model::MemorySource src(model::testutil::header(64, 48), smallScene(64, 48, 12, 5), 333);
@@ -140,14 +135,9 @@ TimingResult simulate(const GoldenRun& run) {
 
 // FNV-1a over the width, the height and every pixel's float bits (-0.0 is not 0.0).
 std::string imageHash(const model::Image& img) {
-  uint64_t h = 14695981039346656037ull;
-  auto add = [&](const void* data, size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-  };
-  add(&img.width, sizeof img.width);
-  add(&img.height, sizeof img.height);
-  add(img.pixels.data(), img.pixels.size() * sizeof(model::Rgb));
+  uint64_t h = test::fnv1a64(&img.width, sizeof img.width);
+  h = test::fnv1a64(&img.height, sizeof img.height, h);
+  h = test::fnv1a64(img.pixels.data(), img.pixels.size() * sizeof(model::Rgb), h);
   std::ostringstream s;
   s << "fnv1a64:" << std::hex << h;
   return s.str();

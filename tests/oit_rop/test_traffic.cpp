@@ -11,6 +11,7 @@
 #include "oit_rop/RopTestUtil.hpp"
 #include "oit_rop/config/ConfigTree.hpp"
 #include "traces/gen/Scenes.hpp"
+#include "traces/test_gen_util.hpp"
 
 using namespace oit;
 using namespace oit::rop;
@@ -18,22 +19,15 @@ using namespace oit::rop::testutil;
 
 namespace {
 
-struct VectorSink : FragmentSink {
-  std::vector<Fragment> fs;
-  void write(const Fragment& f) override { fs.push_back(f); }
-  void commit() override {}
-  uint64_t written() const override { return fs.size(); }
-};
-
 // A generated scene at 1280x720 (seed 1: `oitsim gen SCENE [--backdrop]`)
 // through MLAB k = 4 rgba8t8z32 on iris-pro-5200 with `sets`.
 ChildRun scene720(const std::string& scene, const std::vector<std::string>& sets, bool backdrop = false) {
   gen::SceneOptions o;
   o.backdrop = backdrop;
   return runInChild([&] {
-    VectorSink sink;
+    test::VectorSink sink;
     gen::generateScene(scene, o, sink);
-    model::MemorySource src(gen::sceneHeader(scene, o), sink.fs, 1 << 16);
+    model::MemorySource src(gen::sceneHeader(scene, o), std::move(sink.fragments), 1 << 16);
     model::AlgorithmParams p;
     p.layers = 4;
     p.format = model::StorageFormat::Rgba8T8Z32;

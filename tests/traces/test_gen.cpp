@@ -24,10 +24,12 @@ using oit::test::VectorSink;
 const std::vector<std::string> kAllScenes = {"particles", "hair", "foliage", "glass", "mesh", "demo"};
 
 bool bunnyInstalled() { return fileReadable(findNamedMesh("bunny")->path); }
+// The scenes that draw the glmark2 bunny, when it is not installed.
+bool bunnyMissingFor(const std::string& scene) { return (scene == "mesh" || scene == "demo") && !bunnyInstalled(); }
 
 // Scenes that need the glmark2 bunny are skipped (with a reason) without it.
 #define SKIP_WITHOUT_BUNNY(scene)                                                  \
-  if (((scene) == "mesh" || (scene) == "demo") && !bunnyInstalled())              \
+  if (bunnyMissingFor(scene))                                                       \
   GTEST_SKIP() << "glmark2-data is not installed (apt-get install glmark2-data)"
 
 SceneOptions small(uint32_t w = 320, uint32_t h = 180) {
@@ -163,7 +165,7 @@ void skipScenesWithoutBunny(const std::vector<std::string>& scenes) {
 TEST(SceneStreams, EveryScenePlainAndOverTheBackdropIsAValidOrderedStream) {
   std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+    if (bunnyMissingFor(scene)) {
       without_bunny.push_back(scene);
       continue;
     }
@@ -191,7 +193,7 @@ RunStats generateCounted(const std::string& scene, const SceneOptions& o) {
 TEST(SceneDeterminism, SameSeedSameStreamOtherSeedOtherStream) {
   std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+    if (bunnyMissingFor(scene)) {
       without_bunny.push_back(scene);
       continue;
     }
@@ -227,7 +229,7 @@ TEST(SceneDeterminism, SameStreamFromEveryCompiler) {
   };
   std::vector<std::string> without_bunny;
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+    if (bunnyMissingFor(scene)) {
       without_bunny.push_back(scene);
       continue;
     }
@@ -251,7 +253,7 @@ TEST(SceneDeterminism, GeneratingTwiceFromOneGeneratorRepeatsTheStream) {
 TEST(SceneSizes, DefaultsAt1280x720GiveHalfToFourMillionFragments) {
   std::vector<std::string> without_bunny;  // scenes not checked (reported as a skip below)
   for (const std::string& scene : kAllScenes) {
-    if ((scene == "mesh" || scene == "demo") && !bunnyInstalled()) {
+    if (bunnyMissingFor(scene)) {
       without_bunny.push_back(scene);
       continue;
     }

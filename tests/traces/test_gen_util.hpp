@@ -3,10 +3,10 @@
 #pragma once
 
 #include <cstdint>
-#include <cstring>
 #include <span>
 #include <vector>
 
+#include "Fnv1a.hpp"
 #include "traces/TraceIO.hpp"
 
 namespace oit::test {
@@ -32,12 +32,7 @@ class HashSink : public FragmentSink {
       : width_(width), height_(height), counts_(size_t{width} * height) {}
 
   void write(const Fragment& f) override {
-    unsigned char bytes[sizeof(Fragment)];
-    std::memcpy(bytes, &f, sizeof f);
-    for (unsigned char b : bytes) {
-      hash_ ^= b;
-      hash_ *= 0x100000001b3ull;
-    }
+    hash_ = fnv1a64(&f, sizeof f, hash_);
     if (f.x < width_ && f.y < height_) ++counts_[size_t{f.y} * width_ + f.x];
     else ++outside_;
     ++n_;
@@ -57,7 +52,7 @@ class HashSink : public FragmentSink {
   uint32_t width_, height_;
   uint64_t outside_ = 0;
   std::vector<uint32_t> counts_;
-  uint64_t hash_ = 0xcbf29ce484222325ull;
+  uint64_t hash_ = kFnv1aOffset;
   uint64_t n_ = 0;
 };
 
